@@ -1,0 +1,61 @@
+// The analytic test parts, defined once and reused by the geometry and planner tests and the simulator:
+// each comes as a watertight mesh at a target edge length together with its exact truth (edges, holes).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "geometry/mesh.hpp"
+
+namespace cmm::geometry {
+
+// One sample of a true sharp edge, with the exact outward normals of its two sides at that point
+// (n_up is the side whose normal has the larger +z, then +y, then +x component; DESIGN.md).
+struct TrueEdgeSample {
+  Vec3 position;
+  Vec3 n_up;
+  Vec3 n_down;
+};
+
+// A true sharp edge, densely sampled (chord error far below 1 µm); closed curves do not repeat
+// their first sample.
+struct TrueEdge {
+  std::vector<TrueEdgeSample> samples;
+  bool closed = false;
+  bool convex = true;  // material angle below 180°
+};
+
+// A true cylindrical hole. `centre` lies on the rim the probe enters from, `axis` points out of the
+// material there; `depth` is the length of the wall along the axis.
+struct TrueHole {
+  Vec3 centre;
+  Vec3 axis;
+  double radius = 0;
+  double depth = 0;
+};
+
+struct AnalyticPart {
+  std::string name;
+  TriangleMesh mesh;
+  std::vector<TrueEdge> sharp_edges;
+  std::vector<TrueHole> holes;
+  double size = 0;  // bounding-box diagonal, mm
+};
+
+// All parts stand on z = 0 in their own frame, in millimetres, with `edge_length` the target
+// length of mesh edges (vertices of sharp edges lie exactly on the true edge).
+AnalyticPart make_cube(double side_mm, double edge_length);
+// Thesis case 3: 88 × 95 × 41 mm block, one Ø42 and four Ø10 through holes from the top face.
+AnalyticPart make_case3_block(double edge_length);
+// 120 × 80 × 10 mm plate with through holes of several diameters.
+AnalyticPart make_plate_with_holes(double edge_length);
+// Thesis Table 5.1: two cones of rim radius R and height H joined at their rims (axis z).
+AnalyticPart make_bicone(double radius_mm, double height_mm, double edge_length);
+// Thesis Table 5.2: a hemisphere of radius R below a cone of height H on the same rim (axis z).
+AnalyticPart make_hemisphere_cone(double radius_mm, double height_mm, double edge_length);
+
+// Isotropic Gaussian noise of standard deviation sigma on every vertex coordinate; same seed, same mesh.
+TriangleMesh with_gaussian_noise(const TriangleMesh& mesh, double sigma_mm, std::uint64_t seed);
+
+}  // namespace cmm::geometry

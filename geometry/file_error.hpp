@@ -1,0 +1,27 @@
+// The one error every reader and writer throws: it names the file and where in it things went wrong,
+// so an operator can open the file at that line or byte and see the problem.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+namespace cmm::geometry {
+
+class FileError : public std::runtime_error {
+ public:
+  // what() reads "part.ply: line 12: face index 9999 out of range (6475 vertices)".
+  static FileError at_line(const std::filesystem::path& file, std::size_t line, const std::string& message);
+  static FileError at_byte(const std::filesystem::path& file, std::uint64_t offset, const std::string& message);
+  static FileError whole(const std::filesystem::path& file, const std::string& message);
+
+  const std::filesystem::path& file() const { return file_; }
+
+ private:
+  FileError(std::filesystem::path file, const std::string& full_message)
+      : std::runtime_error(full_message), file_(std::move(file)) {}
+  std::filesystem::path file_;
+};
+
+}  // namespace cmm::geometry
