@@ -1,0 +1,39 @@
+// A reference edge point (thesis §5.1 Sedge): where the scan puts a feature the probe must re-measure,
+// with the outward normals of its two sides; the fields are those of the plan JSON in DESIGN.md.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "geometry/mesh.hpp"
+
+namespace cmm::geometry {
+
+enum class EdgeKind { sharp_edge, hole_rim, boundary };
+
+const char* to_string(EdgeKind kind);
+
+struct EdgePoint {
+  int id = 0;
+  EdgeKind kind = EdgeKind::sharp_edge;
+  bool convex = true;
+  Vec3 position = Vec3::Zero();
+  // n_up is the side whose normal has the larger +z (then +y, then +x) component; an open boundary
+  // has only one side, and no n_down.
+  Vec3 n_up = Vec3::UnitZ();
+  std::optional<Vec3> n_down;
+  Vec3 tangent = Vec3::UnitX();  // normalize(n_up × n_down); along the boundary where there is no n_down
+  bool normals_inferred = false;  // n_down is not measured but inferred (hole rim whose wall the scan lost)
+  std::optional<double> interior_angle_rad;  // material angle between the two sides
+  double n_up_uncertainty_rad = 0, n_down_uncertainty_rad = 0;
+  double n_up_spread_rad = 0, n_down_spread_rad = 0;
+  bool probeable = true;
+  std::string reason;  // why not probeable
+  int curve = -1;      // feature curve or boundary loop it was sampled on
+  int hole = -1;       // hole id for rim points
+};
+
+// Orders two side normals by the n_up convention; true when `a` is the up side.
+bool is_up_side(const Vec3& a, const Vec3& b);
+
+}  // namespace cmm::geometry

@@ -1,0 +1,41 @@
+// From a mesh to what the probe must re-measure: topology, feature curves, reference edge points
+// at a spacing along sharp edges, hole rims and open boundaries, and the holes themselves.
+#pragma once
+
+#include <vector>
+
+#include "geometry/boundary_loops.hpp"
+#include "geometry/edge_point.hpp"
+#include "geometry/feature_edges.hpp"
+#include "geometry/hole.hpp"
+#include "geometry/mesh_topology.hpp"
+
+namespace cmm::geometry {
+
+struct FeatureModelOptions {
+  FeatureOptions features;
+  double spacing = 2.0;  // between reference points along a curve, in mesh units
+  // Radius of the neighbourhood each side normal is estimated over, in mean edge lengths: wide
+  // enough to average scanner noise away, small enough to stay on the side's own face.
+  double neighbourhood_edges = 5.0;
+  double noisy_neighbourhood_edges = 12.0;
+  // ...but no farther than this along the edge, where a rim's turning normals would foreshorten.
+  double neighbourhood_along_edges = 5.0;
+  // ...and within this turn of the normal where it starts, so it cannot wrap around a small bore.
+  double neighbourhood_max_turn_deg = 30.0;
+  // A loop is a circle when its RMS radial residual is below this fraction of its radius.
+  double circle_tolerance = 0.05;
+};
+
+struct FeatureModel {
+  TopologyReport topology;
+  FeatureEdges features;
+  std::vector<BoundaryLoop> loops;
+  std::vector<EdgePoint> points;
+  std::vector<Hole> holes;
+  int rejected_curves = 0;  // feature curves whose two sides turned out to face the same way
+};
+
+FeatureModel extract_features(const TriangleMesh& mesh, const FeatureModelOptions& options = {});
+
+}  // namespace cmm::geometry

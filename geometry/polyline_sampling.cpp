@@ -1,0 +1,61 @@
+// Arc-length bookkeeping for smoothing and resampling polylines.
+#include "geometry/polyline_sampling.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace cmm::geometry {
+
+std::vector<Vec3> smooth_polyline(const std::vector<Vec3>& points, bool closed, int half_window) {
+  const int n = static_cast<int>(points.size());
+  const int window = 2 * half_window + 1;
+  if (half_window <= 0 || n < window) return points;
+  std::vector<Vec3> smoothed(n);
+  for (int i = 0; i < n; ++i) {
+    // Open curves keep the window inside the curve; closed ones wrap.
+    int first = i - half_window;
+    if (!closed) first = std::clamp(first, 0, n - window);
+    Eigen::MatrixXd design(window, 3);
+    Eigen::MatrixXd values(window, 3);
+    double s = 0, s_at_i = 0;
+    for (int j = 0; j < window; ++j) {
+      const int index = ((first + j) % n + n) % n;
+      if (j > 0) s += (points[index] - points[((first + j - 1) % n + n) % n]).norm();
+      if (index == i) s_at_i = s;
+      design.row(j) << 1.0, s, s * s;
+      values.row(j) = points[index].transpose();
+    }
+    for (int j = 0; j < window; ++j) {  // centre the parameter for conditioning
+      const double t = design(j, 1) - s_at_i;
+      design.row(j) << 1.0, t, t * t;
+    }
+    const Eigen::MatrixXd coefficients = design.colPivHouseholderQr().solve(values);
+    smoothed[i] = coefficients.row(0).transpose();
+  }
+  return smoothed;
+}
+
+std::vector<PolylineSample> sample_polyline(const std::vector<Vec3>& points, bool closed, double spacing) {
+  const int n = static_cast<int>(points.size());
+  const int segments = closed ? n : n - 1;
+  std::vector<PolylineSample> samples;
+  if (segments < 1) return samples;
+  std::vector<double> start(segments + 1, 0);
+  for (int i = 0; i < segments; ++i) start[i + 1] = start[i] + (points[(i + 1) % n] - points[i]).norm();
+  const double length = start.back();
+  if (length <= 0) return samples;
+  const int count = std::max(1, static_cast<int>(std::ceil(length / spacing - 1e-9)));
+  int segment = 0;
+  for (int k = 0; k < count; ++k) {
+    const double s = (k + 0.5) * length / count;
+    while (segment < segments - 1 && start[segment + 1] < s) ++segment;
+    const Vec3 a = points[segment], b = points[(segment + 1) % n];
+    const double along = start[segment + 1] - start[segment];
+    const double t = along > 0 ? (s - start[segment]) / along : 0;
+    samples.push_back({a + t * (b - a), along > 0 ? Vec3((b - a) / along) : Vec3::UnitX(), segment});
+  }
+  return samples;
+}
+
+}  // namespace cmm::geometry

@@ -1,0 +1,25 @@
+// Resampling a feature curve or boundary loop at a fixed spacing, after optional smoothing of its
+// vertices; reference edge points are placed at the samples.
+#pragma once
+
+#include <vector>
+
+#include "geometry/mesh.hpp"
+
+namespace cmm::geometry {
+
+struct PolylineSample {
+  Vec3 position;
+  Vec3 direction;  // unit, along the polyline
+  int segment;     // index of the segment the sample lies on
+};
+
+// Local quadratic (Savitzky–Golay) fit over ±half_window vertices by arc length: removes
+// vertex noise without shrinking circles, as a moving average would.
+std::vector<Vec3> smooth_polyline(const std::vector<Vec3>& points, bool closed, int half_window);
+
+// Samples at the centres of equal arcs no longer than `spacing`, so no sample sits on a corner
+// and every point of the curve is within spacing/2 of one. A closed polyline wraps around.
+std::vector<PolylineSample> sample_polyline(const std::vector<Vec3>& points, bool closed, double spacing);
+
+}  // namespace cmm::geometry

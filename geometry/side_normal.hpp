@@ -1,0 +1,53 @@
+// The outward normal of one side of a sharp edge at a point, estimated from the faces of that side
+// near the point (thesis §5.1's up/down patch normals), with its uncertainty.
+#pragma once
+
+#include <vector>
+
+#include "geometry/edge_adjacency.hpp"
+#include "geometry/face_geometry.hpp"
+
+namespace cmm::geometry {
+
+struct SideNormal {
+  Vec3 normal = Vec3::Zero();
+  double uncertainty_rad = 0;   // standard error of `normal`
+  double facet_spread_rad = 0;  // RMS angle of the single facets about the fitted normal field
+  int face_count = 0;
+};
+
+// Finds, for one side of an edge, the faces reachable from a seed face without crossing a feature or
+// boundary edge, whose centroids lie within a radius of the point and whose (filtered) normals stay
+// within max_turn of the seed's: the last bound keeps a region on a small bore from wrapping around
+// it. Reuses its scratch between calls.
+class SideRegionFinder {
+ public:
+  SideRegionFinder(const EdgeAdjacency& adjacency, const FaceGeometry& faces, const std::vector<char>& is_feature,
+                   const Points& similarity_normals, double max_turn_rad);
+  // Faces within `radius` of the point and at most `along` from it along the edge's tangent: a
+  // region long across the edge gathers faces, while keeping it short along the edge keeps a
+  // rim's turning normals from foreshortening the mean.
+  const std::vector<int>& region(int seed_face, const Vec3& centre, const Vec3& tangent, double radius, double along);
+  const std::vector<int>& patch(int seed_face);
+
+ private:
+  const std::vector<int>& grow(int seed_face, const Vec3& centre, const Vec3& tangent, double radius, double along,
+                               double min_cos, const Vec3& reference);
+
+  const EdgeAdjacency& adjacency_;
+  const FaceGeometry& faces_;
+  const std::vector<char>& is_feature_;
+  const Points& similarity_normals_;
+  double min_cos_;
+  std::vector<unsigned> stamp_;
+  unsigned current_ = 0;
+  std::vector<int> region_;
+};
+
+// Area-weighted normal of a side region at `point` on an edge along `tangent`. When the normals
+// change measurably across the region (a curved side), the field is fitted linearly in the along-
+// and across-edge coordinates and taken at the point itself: a one-sided average would be biased
+// toward the region's middle. On a flat side the plain mean is kept, as it is the less noisy.
+SideNormal side_normal(const FaceGeometry& faces, const std::vector<int>& region, const Vec3& point, const Vec3& tangent);
+
+}  // namespace cmm::geometry
