@@ -39,6 +39,7 @@ std::vector<BoundaryLoop> boundary_loops(const TriangleMesh& mesh, const EdgeAdj
     const int h = adjacency.half_edge(e, 0);
     outgoing.emplace(mesh.faces(h / 3, h % 3), h);
   }
+  if (outgoing.empty()) return {};  // closed: spare the component labelling
   int component_count = 0;
   const std::vector<int> component = face_components(mesh, adjacency, &component_count);
 

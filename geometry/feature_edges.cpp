@@ -11,8 +11,6 @@
 namespace cmm::geometry {
 namespace {
 
-double angle_between(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
-
 // Positive when the edge is convex: each face's far corner lies below the other face's plane.
 double convexity(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, const Points& normals, int e) {
   double sum = 0;
@@ -116,11 +114,9 @@ std::vector<FeatureCurve> prune_dangling(const TriangleMesh& mesh, const EdgeAdj
 
 // Hysteresis: from each free end, step onto the weak edge that best continues the curve, as long as
 // one turns by less than 45°.
-void extend_free_ends(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, const std::vector<double>& dihedral,
-                      double weak_threshold, std::vector<char>& is_feature) {
+void extend_free_ends(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, const std::vector<double>& cos_dihedral,
+                      double weak_cos, std::vector<char>& is_feature) {
   const int vertex_count = static_cast<int>(mesh.vertices.rows());
-  std::vector<char> all(adjacency.edge_count(), 1);
-  const FeatureGraph incident = feature_graph(adjacency, all, vertex_count);  // every edge at a vertex
   std::vector<int> degree(vertex_count, 0);
   for (int e = 0; e < adjacency.edge_count(); ++e)
     if (is_feature[e]) ++degree[adjacency.edges(e, 0)], ++degree[adjacency.edges(e, 1)];
@@ -128,6 +124,9 @@ void extend_free_ends(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, 
   std::vector<int> ends;
   for (int v = 0; v < vertex_count; ++v)
     if (degree[v] == 1) ends.push_back(v);
+  if (ends.empty()) return;
+  std::vector<char> all(adjacency.edge_count(), 1);
+  const FeatureGraph incident = feature_graph(adjacency, all, vertex_count);  // every edge at a vertex
   const double min_cos = std::cos(std::numbers::pi / 4);
   for (int v : ends) {
     for (int step = 0; step < 64 && degree[v] == 1; ++step) {
@@ -139,7 +138,7 @@ void extend_free_ends(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, 
       double best_cos = min_cos;
       for (int i = incident.start[v]; i < incident.start[v + 1]; ++i) {
         const int e = incident.edges[i];
-        if (is_feature[e] || adjacency.use_count(e) != 2 || dihedral[e] <= weak_threshold) continue;
+        if (is_feature[e] || adjacency.use_count(e) != 2 || cos_dihedral[e] >= weak_cos) continue;
         const double c = direction.dot((vertex(mesh, other_end(e, v)) - vertex(mesh, v)).normalized());
         if (c > best_cos) best = e, best_cos = c;
       }
@@ -158,37 +157,41 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
                            const FeatureOptions& options) {
   FeatureEdges result;
   const int edge_count = adjacency.edge_count();
-  std::vector<double> dihedral(edge_count, 0);
+  // Cosines rather than angles: the threshold and the median compare the same either way, and the
+  // 4M-triangle benchmark has no time for an atan2 per edge.
+  std::vector<double> cos_dihedral(edge_count, 1);
+  auto cosines = [&](const Points& normals) {
+    for (int e = 0; e < edge_count; ++e)
+      if (adjacency.use_count(e) == 2)
+        cos_dihedral[e] = normals.row(adjacency.half_edge(e, 0) / 3).dot(normals.row(adjacency.half_edge(e, 1) / 3));
+  };
+  cosines(faces.normals);
   std::vector<double> interior;
+  interior.reserve(edge_count);
   double length_sum = 0;
   for (int e = 0; e < edge_count; ++e) {
-    length_sum += (vertex(mesh, adjacency.edges(e, 0)) - vertex(mesh, adjacency.edges(e, 1))).norm();
-    if (adjacency.use_count(e) != 2) continue;
-    dihedral[e] = angle_between(faces.normals.row(adjacency.half_edge(e, 0) / 3).transpose(),
-                                faces.normals.row(adjacency.half_edge(e, 1) / 3).transpose());
-    interior.push_back(dihedral[e]);
+    length_sum += (mesh.vertices.row(adjacency.edges(e, 0)) - mesh.vertices.row(adjacency.edges(e, 1))).norm();
+    if (adjacency.use_count(e) == 2) interior.push_back(cos_dihedral[e]);
   }
   result.mean_edge_length = edge_count ? length_sum / edge_count : 0;
   if (!interior.empty()) {
     auto middle = interior.begin() + interior.size() / 2;
     std::nth_element(interior.begin(), middle, interior.end());
-    result.median_dihedral_deg = *middle * 180 / std::numbers::pi;
+    result.median_dihedral_deg = std::acos(std::clamp(*middle, -1.0, 1.0)) * 180 / std::numbers::pi;
   }
   result.noisy = result.median_dihedral_deg > options.noisy_median_deg;
 
   const Points* normals = &faces.normals;
   if (result.noisy) {
     result.filtered_normals = bilateral_filtered_normals(mesh, adjacency, faces);
-    const Points& filtered = result.filtered_normals;
-    normals = &filtered;
-    for (int e = 0; e < edge_count; ++e)
-      if (adjacency.use_count(e) == 2)
-        dihedral[e] = angle_between(filtered.row(adjacency.half_edge(e, 0) / 3).transpose(),
-                                    filtered.row(adjacency.half_edge(e, 1) / 3).transpose());
+    normals = &result.filtered_normals;
+    cosines(result.filtered_normals);
   }
   const double threshold = options.angle_deg * std::numbers::pi / 180;
+  const double cos_threshold = std::cos(threshold);
   result.is_feature.assign(edge_count, 0);
-  for (int e = 0; e < edge_count; ++e) result.is_feature[e] = adjacency.use_count(e) == 2 && dihedral[e] > threshold;
+  for (int e = 0; e < edge_count; ++e)
+    result.is_feature[e] = adjacency.use_count(e) == 2 && cos_dihedral[e] < cos_threshold;
 
   // Spurs go first, or hysteresis would extend a cone apex's spokes down the cone; a spur also
   // splits the true curve it touches, so chain again once it is gone.
@@ -197,7 +200,7 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
   const double min_spoke_length =
       (result.noisy ? options.noisy_min_spoke_edges : options.min_spoke_edges) * result.mean_edge_length;
   prune_dangling(mesh, adjacency, min_length, min_spoke_length, result.is_feature);
-  extend_free_ends(mesh, adjacency, dihedral, options.continuation_fraction * threshold, result.is_feature);
+  extend_free_ends(mesh, adjacency, cos_dihedral, std::cos(options.continuation_fraction * threshold), result.is_feature);
   result.curves = prune_dangling(mesh, adjacency, min_length, min_spoke_length, result.is_feature);
 
   for (FeatureCurve& c : result.curves) {
