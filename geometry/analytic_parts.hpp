@@ -47,8 +47,10 @@ struct AnalyticPart {
 // length of mesh edges (vertices of sharp edges lie exactly on the true edge).
 AnalyticPart make_cube(double side_mm, double edge_length);
 // Thesis case 3: 88 × 95 × 41 mm block, one Ø42 and four Ø10 through holes from the top face.
+// Hole axes (x, y): Ø42 at (44, 47.5); Ø10 at (13, 12.5), (75, 12.5), (13, 82.5), (75, 82.5).
 AnalyticPart make_case3_block(double edge_length);
 // 120 × 80 × 10 mm plate with through holes of several diameters.
+// Hole axes (x, y): Ø20 at (30, 40); Ø12 at (70, 25) and (70, 55); Ø6 at (100, 20); Ø8 at (100, 60).
 AnalyticPart make_plate_with_holes(double edge_length);
 // Thesis Table 5.1: two cones of rim radius R and height H joined at their rims (axis z).
 AnalyticPart make_bicone(double radius_mm, double height_mm, double edge_length);
