@@ -2,6 +2,8 @@
 // closed circular curves → boundary loops (circular hole loops get inferred wall normals).
 #include "geometry/feature_model.hpp"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -74,7 +76,8 @@ class Extractor {
     std::vector<std::vector<CurveSample>> samples(curves.size());
     std::vector<Rim> rims;
     for (std::size_t c = 0; c < curves.size(); ++c) {
-      const std::vector<Vec3> points = smooth_polyline(positions(mesh_, curves[c].vertices), curves[c].closed, half_window_);
+      const std::vector<Vec3> raw = positions(mesh_, curves[c].vertices);
+      const std::vector<Vec3> points = smooth_polyline(raw, curves[c].closed, smoothing_window(raw.size(), curves[c].closed));
       samples[c] = sample_curve(finder, curves[c], points);
       if (!two_distinct_sides(samples[c])) {
         samples[c].clear();
@@ -82,7 +85,7 @@ class Extractor {
         continue;
       }
       if (curves[c].closed) {
-        if (auto rim = bore_rim(static_cast<int>(c), points, samples[c])) rims.push_back(*rim);
+        if (auto rim = bore_rim(static_cast<int>(c), raw, samples[c])) rims.push_back(*rim);
       }
     }
     std::vector<int> hole_of_curve = bores(finder, rims);
@@ -111,6 +114,13 @@ class Extractor {
     return result;
   }
 
+  // Noisy meshes smooth ±3 vertices; a small closed curve less, so the window never spans more than
+  // about a twelfth of a loop (a Ø6 rim has 19 vertices: 7 would span 130° of it).
+  int smoothing_window(std::size_t vertices, bool closed) const {
+    if (half_window_ == 0) return 0;
+    return closed ? std::min(half_window_, static_cast<int>(vertices / 12)) : half_window_;
+  }
+
   // A crease separates two sides that face different ways. Where the neighbourhood normals of the
   // two sides agree (median over the curve below half the feature angle), the curve was a fold of
   // noise or of a coarse apex tessellation, not an edge.
@@ -119,8 +129,10 @@ class Extractor {
     std::vector<double> turn;
     for (const CurveSample& s : samples) turn.push_back(angle_between(s.left.normal, s.right.normal));
     std::nth_element(turn.begin(), turn.begin() + turn.size() / 2, turn.end());
-    return turn[turn.size() / 2] >= 0.5 * options_.features.angle_deg * std::numbers::pi / 180;
+    return turn[turn.size() / 2] >= distinct_sides_rad();
   }
+
+  double distinct_sides_rad() const { return 0.5 * options_.features.angle_deg * std::numbers::pi / 180; }
 
   // The side normal grown from a seed face; a seed that is a fold of noise (its region stays tiny)
   // hands over to the neighbour whose region is largest.
@@ -168,6 +180,8 @@ class Extractor {
     for (Rim& rim : rims) {
       const std::vector<int>& wall = finder.patch(rim.wall_face);
       const int key = *std::min_element(wall.begin(), wall.end());
+      const Vec3 axis = wall_axis(rim, wall);
+      rim.axis = axis.dot(rim.axis) >= 0 ? axis : Vec3(-axis);
       rim.draft = wall_draft(rim, wall);
       by_wall[key].push_back(&rim);
       wall_faces.try_emplace(key, wall);
@@ -215,6 +229,21 @@ class Extractor {
   // A bore wall's normal at a rim point is known far better from the circle fitted to the whole rim
   // than from the few wall faces near the point (on a Ø6 bore the wall turns 30° within 1.6 mm):
   // the radial direction to the axis, tilted by the wall's draft measured over the whole wall.
+  // The bore's axis from its wall: the direction all wall normals are square to (the smallest
+  // eigenvector of their scatter), from hundreds of faces rather than one noisy rim's plane.
+  Vec3 wall_axis(const Rim& rim, const std::vector<int>& wall) const {
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    int used = 0;
+    for (int f : wall) {
+      const Vec3 n = faces_.normals.row(f).transpose();
+      if (std::abs(n.dot(rim.axis)) > 0.5) continue;  // not wall
+      scatter += faces_.areas[f] * n * n.transpose();
+      ++used;
+    }
+    if (used < 8) return rim.axis;
+    return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+  }
+
   // The wall's mean tilt along the axis over the whole bore: the folds along its two rims lean
   // opposite ways and cancel. Taken as zero (a cylinder) unless 3 standard errors away from it.
   double wall_draft(const Rim& rim, const std::vector<int>& wall) const {
@@ -273,6 +302,10 @@ class Extractor {
       if (std::min(up.face_count, down.face_count) < static_cast<int>(min_region_faces)) {
         p.probeable = false;
         p.reason = "too few faces beside the edge here to estimate the normal of both sides (a fold of scan noise?)";
+      } else if (turn < distinct_sides_rad()) {
+        p.probeable = false;
+        p.reason = "the two sides' normals differ by only " + std::to_string(static_cast<int>(std::lround(turn * 180 / std::numbers::pi))) +
+                   " deg here: the crease fades out in the mesh";
       }
       if (hole >= 0) model_.holes[hole].rim_point_ids.push_back(p.id);
       model_.points.push_back(p);
@@ -281,10 +314,11 @@ class Extractor {
 
   void emit_loop_points(SideRegionFinder& finder, int loop_index) {
     const BoundaryLoop& loop = model_.loops[loop_index];
-    const std::vector<Vec3> points = smooth_polyline(positions(mesh_, loop.vertices), true, half_window_);
+    const std::vector<Vec3> raw = positions(mesh_, loop.vertices);
+    const std::vector<Vec3> points = smooth_polyline(raw, true, smoothing_window(raw.size(), true));
     std::optional<Hole> hole;
     if (loop.kind == LoopKind::hole) {
-      const Circle3 circle = fit_circle(points);
+      const Circle3 circle = fit_circle(raw);
       if (is_circle(circle, loop.perimeter, options_.circle_tolerance)) {
         hole = Hole{};
         hole->id = static_cast<int>(model_.holes.size());

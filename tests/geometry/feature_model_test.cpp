@@ -105,7 +105,7 @@ TEST_P(FeatureModelOnParts, MatchesTruth) {
               model.points.size(), coverage, worst_distance, worst_normal, std::sqrt(normal_squares / std::max(1, normal_count)),
               over_tolerance, off_edge, model.features.noisy);
   EXPECT_GE(coverage, 0.98);
-  EXPECT_LE(unprobeable, static_cast<int>(model.points.size()) / 100) << "points whose side normals could not be estimated";
+  EXPECT_LE(unprobeable, static_cast<int>(model.points.size()) / 20) << "points whose side normals could not be estimated";
   EXPECT_EQ(wrong_convexity, 0);
   EXPECT_LE(worst_normal, v.normal_tolerance_deg);
 
