@@ -1,0 +1,36 @@
+// The plan JSON of DESIGN.md ("cmmd.plan/1", schema in docs/plan.schema.json): what cmm-plan writes
+// and the daemon stores with each job. Vectors are [x, y, z]; angles in degrees at this edge only.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "geometry/feature_model.hpp"
+#include "geometry/mesh_io.hpp"
+
+namespace cmm::planner {
+
+inline constexpr const char* plan_schema_id = "cmmd.plan/1";
+
+// Where the plan's inputs came from, recorded so a plan can be traced back and re-run.
+struct PlanInputs {
+  std::filesystem::path model_file;
+  double scale = 1;
+  double spacing = 2;
+  double feature_angle_deg = 30;
+  double probe_radius = 1;
+  double delta = 0.2;
+  std::string delta_source;
+  geometry::ReadReport read_report;
+  std::size_t vertex_count = 0, face_count = 0;
+  std::vector<std::string> notes;
+};
+
+nlohmann::json to_json(const geometry::EdgePoint& point);
+nlohmann::json to_json(const geometry::Hole& hole);
+nlohmann::json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs);
+
+}  // namespace cmm::planner
