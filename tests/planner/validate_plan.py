@@ -1,0 +1,17 @@
+"""Validates plan JSON files against docs/plan.schema.json; run by /usr/bin/python3 (Debian's jsonschema)."""
+import json
+import sys
+
+import jsonschema
+
+schema_path, *plans = sys.argv[1:]
+with open(schema_path) as f:
+    validator = jsonschema.Draft202012Validator(json.load(f))
+failed = False
+for path in plans:
+    with open(path) as f:
+        plan = json.load(f)
+    for error in validator.iter_errors(plan):
+        failed = True
+        print(f"{path}: {'/'.join(map(str, error.absolute_path)) or '(root)'}: {error.message}")
+sys.exit(1 if failed else 0)
