@@ -7,7 +7,6 @@ FaceGeometry face_geometry(const TriangleMesh& mesh) {
   const Eigen::Index face_count = mesh.faces.rows();
   FaceGeometry g;
   g.normals.resize(face_count, 3);
-  g.centroids.resize(face_count, 3);
   g.areas.resize(face_count);
   for (Eigen::Index f = 0; f < face_count; ++f) {
     const Vec3 a = vertex(mesh, mesh.faces(f, 0)), b = vertex(mesh, mesh.faces(f, 1)), c = vertex(mesh, mesh.faces(f, 2));
@@ -15,7 +14,6 @@ FaceGeometry face_geometry(const TriangleMesh& mesh) {
     const double twice_area = cross.norm();
     g.areas[f] = 0.5 * twice_area;
     g.normals.row(f) = (twice_area > 0 ? Vec3(cross / twice_area) : Vec3::Zero()).transpose();
-    g.centroids.row(f) = ((a + b + c) / 3.0).transpose();
   }
   return g;
 }

@@ -70,7 +70,7 @@ class Extractor {
 
   FeatureModel run() {
     const Points& similarity = model_.features.noisy ? model_.features.filtered_normals : faces_.normals;
-    SideRegionFinder finder(adjacency_, faces_, model_.features.is_feature, similarity,
+    SideRegionFinder finder(mesh_, adjacency_, faces_, model_.features.is_feature, similarity,
                             options_.neighbourhood_max_turn_deg * std::numbers::pi / 180);
     const auto& curves = model_.features.curves;
     std::vector<std::vector<CurveSample>> samples(curves.size());
@@ -147,7 +147,7 @@ class Extractor {
         if (other.size() > region.size()) region = other;
       }
     }
-    return side_normal(faces_, region, s.position, s.direction);
+    return side_normal(mesh_, faces_, region, s.position, s.direction);
   }
 
   // A closed circular curve with one side a wall around the axis whose normals face the axis.
@@ -250,7 +250,7 @@ class Extractor {
     double w_sum = 0, w2_sum = 0, sum = 0, squares = 0;
     for (int f : wall) {
       const Vec3 n = faces_.normals.row(f).transpose();
-      Vec3 to_axis = rim.circle.centre - Vec3(faces_.centroids.row(f).transpose());
+      Vec3 to_axis = rim.circle.centre - face_centroid(mesh_, f);
       to_axis -= to_axis.dot(rim.axis) * rim.axis;
       const double radial = n.dot(to_axis.normalized());
       if (radial < 0.5) continue;  // not wall
@@ -332,7 +332,7 @@ class Extractor {
     }
     for (const PolylineSample& s : sample_polyline(points, true, options_.spacing)) {
       const int face = loop.half_edges[s.segment] / 3;
-      const SideNormal side = side_normal(faces_, finder.region(face, s.position, s.direction, radius_, along_), s.position, s.direction);
+      const SideNormal side = side_normal(mesh_, faces_, finder.region(face, s.position, s.direction, radius_, along_), s.position, s.direction);
       EdgePoint p;
       p.id = static_cast<int>(model_.points.size());
       p.position = s.position;

@@ -11,11 +11,9 @@ int find_root(std::vector<int>& parent, int x) {
   return x;
 }
 
-}  // namespace
-
-std::vector<int> face_components(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, int* component_count) {
-  const int face_count = static_cast<int>(mesh.faces.rows());
-  std::vector<int> parent(face_count);
+// Union–find over faces joined by shared edges; roots are the smallest face of each component.
+std::vector<int> face_roots(const TriangleMesh& mesh, const EdgeAdjacency& adjacency) {
+  std::vector<int> parent(mesh.faces.rows());
   std::iota(parent.begin(), parent.end(), 0);
   for (int e = 0; e < adjacency.edge_count(); ++e) {
     const int first = EdgeAdjacency::face_of(adjacency.half_edge(e, 0));
@@ -25,6 +23,14 @@ std::vector<int> face_components(const TriangleMesh& mesh, const EdgeAdjacency& 
       if (a != b) parent[std::max(a, b)] = std::min(a, b);
     }
   }
+  return parent;
+}
+
+}  // namespace
+
+std::vector<int> face_components(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, int* component_count) {
+  const int face_count = static_cast<int>(mesh.faces.rows());
+  std::vector<int> parent = face_roots(mesh, adjacency);
   std::vector<int> component(face_count, -1), label(face_count, -1);
   int count = 0;
   for (int f = 0; f < face_count; ++f) {
@@ -38,7 +44,8 @@ std::vector<int> face_components(const TriangleMesh& mesh, const EdgeAdjacency& 
 
 TopologyReport topology_report(const TriangleMesh& mesh, const EdgeAdjacency& adjacency) {
   TopologyReport report;
-  face_components(mesh, adjacency, &report.components);
+  std::vector<int> parent = face_roots(mesh, adjacency);
+  for (int f = 0; f < static_cast<int>(parent.size()); ++f) report.components += find_root(parent, f) == f;
   for (int e = 0; e < adjacency.edge_count(); ++e) {
     const int uses = adjacency.use_count(e);
     if (uses == 1) ++report.boundary_edges;

@@ -8,10 +8,11 @@
 
 namespace cmm::geometry {
 
-SideRegionFinder::SideRegionFinder(const EdgeAdjacency& adjacency, const FaceGeometry& faces,
+SideRegionFinder::SideRegionFinder(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, const FaceGeometry& faces,
                                    const std::vector<char>& is_feature, const Points& similarity_normals,
                                    double max_turn_rad)
-    : adjacency_(adjacency),
+    : mesh_(mesh),
+      adjacency_(adjacency),
       faces_(faces),
       is_feature_(is_feature),
       similarity_normals_(similarity_normals),
@@ -49,7 +50,7 @@ const std::vector<int>& SideRegionFinder::grow(int seed_face, const Vec3& centre
       const int g = adjacency_.other_face(e, f);
       if (g < 0 || stamp_[g] == current_) continue;
       stamp_[g] = current_;
-      const Vec3 offset = faces_.centroids.row(g).transpose() - centre;
+      const Vec3 offset = face_centroid(mesh_, g) - centre;
       if (offset.squaredNorm() > radius_squared || std::abs(offset.dot(tangent)) > along) continue;
       if (similarity_normals_.row(g).dot(reference.transpose()) < min_cos) continue;
       region_.push_back(g);
@@ -122,12 +123,13 @@ Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used) {
 
 }  // namespace
 
-SideNormal side_normal(const FaceGeometry& faces, const std::vector<int>& region, const Vec3& point, const Vec3& tangent) {
+SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+                       const Vec3& point, const Vec3& tangent) {
   SideNormal result;
   std::vector<Sample> samples;
   samples.reserve(region.size());
   for (int f : region) {
-    const Vec3 offset = faces.centroids.row(f).transpose() - point;
+    const Vec3 offset = face_centroid(mesh, f) - point;
     const double s = offset.dot(tangent);
     samples.push_back({faces.areas[f], terms_at(s, (offset - s * tangent).norm()), faces.normals.row(f).transpose()});
   }

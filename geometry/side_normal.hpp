@@ -22,8 +22,8 @@ struct SideNormal {
 // it. Reuses its scratch between calls.
 class SideRegionFinder {
  public:
-  SideRegionFinder(const EdgeAdjacency& adjacency, const FaceGeometry& faces, const std::vector<char>& is_feature,
-                   const Points& similarity_normals, double max_turn_rad);
+  SideRegionFinder(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, const FaceGeometry& faces,
+                   const std::vector<char>& is_feature, const Points& similarity_normals, double max_turn_rad);
   // Faces within `radius` of the point and at most `along` from it along the edge's tangent: a
   // region long across the edge gathers faces, while keeping it short along the edge keeps a
   // rim's turning normals from foreshortening the mean.
@@ -34,6 +34,7 @@ class SideRegionFinder {
   const std::vector<int>& grow(int seed_face, const Vec3& centre, const Vec3& tangent, double radius, double along,
                                double min_cos, const Vec3& reference);
 
+  const TriangleMesh& mesh_;
   const EdgeAdjacency& adjacency_;
   const FaceGeometry& faces_;
   const std::vector<char>& is_feature_;
@@ -48,6 +49,7 @@ class SideRegionFinder {
 // change measurably across the region (a curved side), the field is fitted linearly in the along-
 // and across-edge coordinates and taken at the point itself: a one-sided average would be biased
 // toward the region's middle. On a flat side the plain mean is kept, as it is the less noisy.
-SideNormal side_normal(const FaceGeometry& faces, const std::vector<int>& region, const Vec3& point, const Vec3& tangent);
+SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+                       const Vec3& point, const Vec3& tangent);
 
 }  // namespace cmm::geometry
