@@ -1,8 +1,9 @@
 """Side-by-side figures for docs/PERFORMANCE.md, from one run on one machine.
 
 Runs cmmd's geometry_bench (Google Benchmark) and Open3D's read_triangle_mesh on the same binary
-STL files, and prints a Markdown table of medians and ratios. Run with Debian's interpreter:
-    /usr/bin/python3 bench/compare_open3d.py build/release/bench/geometry_bench
+STL files, and prints a Markdown table of medians and ratios. Needs Debian's Open3D, which the
+tests do not (apt-get install python3-open3d); run with Debian's interpreter:
+    /usr/bin/python3 bench/compare_open3d.py build-bench/bench/geometry_bench
 """
 import json
 import os
