@@ -1,0 +1,77 @@
+// The extraction pipeline's internals, shared by feature_model.cpp (curves, reference points,
+// boundary loops) and bore_detection.cpp (bores); not part of the geometry interface.
+#pragma once
+
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <vector>
+
+#include "geometry/circle_fit.hpp"
+#include "geometry/face_geometry.hpp"
+#include "geometry/feature_model.hpp"
+#include "geometry/polyline_sampling.hpp"
+#include "geometry/side_normal.hpp"
+
+namespace cmm::geometry::detail {
+
+// One sample on a feature curve with the normals of the face sides left and right of the curve
+// direction (left: the face whose winding runs along the curve).
+struct CurveSample {
+  PolylineSample at;
+  SideNormal left, right;
+  int left_face = -1, right_face = -1;
+};
+
+// A closed feature curve found to be the rim of a bore.
+struct Rim {
+  int curve;
+  Circle3 circle;
+  bool wall_is_left;
+  int wall_face;
+  Vec3 axis;         // out of the material at this rim
+  double draft = 0;  // tan of the wall's tilt toward the axis direction, over the whole wall
+};
+
+// Small residuals alone are not enough: nearly collinear points fit a huge circle well. A rim goes
+// all the way round, so its length must be close to 2πR too (an inscribed octagon is 2.6 % short).
+inline bool is_circle(const Circle3& c, double perimeter, double tolerance) {
+  const double circumference = 2 * std::numbers::pi * c.radius;
+  return c.radius > 0 && c.rms_mm < tolerance * c.radius && c.out_of_plane_mm < tolerance * c.radius &&
+         std::abs(perimeter - circumference) < 2 * tolerance * circumference;
+}
+
+inline double angle_between(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+
+class Extractor {
+ public:
+  Extractor(const TriangleMesh& mesh, const FeatureModelOptions& options);
+  FeatureModel run();
+
+ private:
+  // feature_model.cpp
+  std::vector<CurveSample> sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points);
+  int smoothing_window(std::size_t vertices, bool closed) const;
+  bool two_distinct_sides(const std::vector<CurveSample>& samples) const;
+  SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s);
+  void emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole);
+  void emit_loop_points(SideRegionFinder& finder, int loop_index);
+  double distinct_sides_rad() const { return 0.5 * options_.features.angle_deg * std::numbers::pi / 180; }
+  // bore_detection.cpp
+  std::optional<Rim> bore_rim(int curve, const std::vector<Vec3>& points, const std::vector<CurveSample>& samples);
+  std::vector<int> bores(SideRegionFinder& finder, std::vector<Rim>& rims);
+  Vec3 wall_axis(const Rim& rim, const std::vector<int>& wall) const;
+  double wall_draft(const Rim& rim, const std::vector<int>& wall) const;
+  void wall_normals_from_bore(const Rim& rim, std::vector<CurveSample>& samples);
+
+  static constexpr std::size_t min_region_faces = 6;
+  const TriangleMesh& mesh_;
+  const FeatureModelOptions& options_;
+  EdgeAdjacency adjacency_;
+  FaceGeometry faces_;
+  FeatureModel model_;
+  double radius_ = 0, along_ = 0;
+  int half_window_ = 0;
+};
+
+}  // namespace cmm::geometry::detail
