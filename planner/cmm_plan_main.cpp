@@ -1,7 +1,10 @@
 // cmm-plan: offline planning from a mesh, no machine. Reads the model, extracts reference edge points
 // and holes, writes the plan JSON and prints a summary an operator can read at a glance.
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
@@ -28,6 +31,11 @@ int plan(const std::string& model_path, const std::string& output, planner::Plan
     return 2;
   }
   mesh.vertices *= inputs.scale;
+  if (!mesh.vertices.allFinite()) {
+    std::cerr << "cmm-plan: " << model_path << ": --scale " << inputs.scale
+              << " takes coordinates beyond the range of a double\n";
+    return 2;
+  }
   inputs.model_file = model_path;
   inputs.read_report = read.report;
   inputs.vertex_count = static_cast<std::size_t>(mesh.vertices.rows());
@@ -41,11 +49,21 @@ int plan(const std::string& model_path, const std::string& output, planner::Plan
   inputs.notes.push_back("no registration given: T_M_S is taken as identity (the plan is in the scan frame S)");
   inputs.notes.push_back("probe windows, approaches and the move program are not computed yet (planner issue)");
   const nlohmann::json plan = planner::plan_json(model, inputs);
-  std::ofstream out(output);
-  out << plan.dump(1) << '\n';
-  if (!out) {
-    std::cerr << "cmm-plan: cannot write " << output << '\n';
-    return 1;
+  // Written beside the target and renamed over it, so a failed write never leaves half a plan.
+  const std::string partial = output + ".partial";
+  {
+    std::ofstream out(partial);
+    out << plan.dump(1) << '\n';
+    out.close();
+    std::error_code renamed;
+    if (out) std::filesystem::rename(partial, output, renamed);
+    if (!out || renamed) {
+      std::error_code ignored;
+      std::filesystem::remove(partial, ignored);
+      std::cerr << "cmm-plan: cannot write " << output << ": " << (renamed ? renamed.message() : std::strerror(errno))
+                << '\n';
+      return 1;
+    }
   }
 
   const auto& t = model.topology;
@@ -104,5 +122,8 @@ int main(int argc, char** argv) {
   } catch (const cmm::geometry::FileError& error) {
     std::cerr << "cmm-plan: " << error.what() << '\n';
     return 2;
+  } catch (const std::exception& error) {  // out of memory and the like: say so, no core dump
+    std::cerr << "cmm-plan: " << model_path << ": " << error.what() << '\n';
+    return 1;
   }
 }

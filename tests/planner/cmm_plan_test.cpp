@@ -142,6 +142,22 @@ TEST_F(CmmPlan, PointCloudIsRefusedClearly) {
   EXPECT_FALSE(fs::exists(path("plan.json")));
 }
 
+TEST_F(CmmPlan, ScaleBeyondDoubleRangeIsRefused) {
+  const CommandResult r = plan(CMMD_SOURCE_DIR "/config/samples/case3_block.ply", path("plan.json"), "--scale 1e308");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("beyond the range"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("plan.json")));
+}
+
+TEST_F(CmmPlan, UnwritableOutputFailsAndLeavesNothing) {
+  const std::string output = path("missing-folder/plan.json");
+  const CommandResult r = plan(CMMD_SOURCE_DIR "/config/samples/case3_block.ply", output);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("cannot write " + output), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(output));
+  EXPECT_FALSE(fs::exists(output + ".partial"));
+}
+
 TEST_F(CmmPlan, BrokenFileNamesFileAndLine) {
   std::ofstream(path("broken.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n";
   const CommandResult r = plan(path("broken.obj"), path("plan.json"));
