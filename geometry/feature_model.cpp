@@ -207,7 +207,10 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
 }  // namespace detail
 
 FeatureModel extract_features(const TriangleMesh& mesh, const FeatureModelOptions& options) {
-  return detail::Extractor(mesh, options).run();
+  FeatureModel model = detail::Extractor(mesh, options).run();
+  for (const Hole& hole : model.holes)
+    for (int id : hole.rim_point_ids) align_to_hole(model.points[static_cast<std::size_t>(id)], hole);
+  return model;
 }
 
 }  // namespace cmm::geometry

@@ -5,6 +5,7 @@
 #include <optional>
 #include <vector>
 
+#include "geometry/edge_point.hpp"
 #include "geometry/mesh.hpp"
 
 namespace cmm::geometry {
@@ -12,6 +13,7 @@ namespace cmm::geometry {
 enum class HoleSource { open_boundary, bore };
 
 const char* to_string(HoleSource source);
+
 
 struct Hole {
   int id = 0;
@@ -24,5 +26,12 @@ struct Hole {
   std::optional<double> depth;  // wall length along the axis, when the wall is in the mesh
   std::vector<int> rim_point_ids;
 };
+
+// A rim point's side normals lie in its hole's meridian plane (the hole is a surface of
+// revolution), and the circle fitted to the whole rim knows that plane far better than the few
+// noisy facets beside one point: projects the normals into the meridian plane through the point's
+// position and sets its tangent across it. The probe's cross-section plane then contains the
+// hole's axis, as the two-touch compensation assumes, wherever along the rim the point sits.
+void align_to_hole(EdgePoint& point, const Hole& hole);
 
 }  // namespace cmm::geometry
