@@ -1,89 +1,142 @@
 // cmm-plan: offline planning from a mesh, no machine. Reads the model, extracts reference edge points
-// and holes, writes the plan JSON and prints a summary an operator can read at a glance.
+// and holes, registers S to M, plans windows, touches and the ordered move program, writes the plan
+// JSON (and DMIS) and prints a summary an operator can read at a glance.
 #include <CLI/CLI.hpp>
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
 
 #include "geometry/feature_model.hpp"
 #include "geometry/file_error.hpp"
 #include "geometry/mesh_io.hpp"
+#include "planner/dmis_export.hpp"
+#include "planner/machine.hpp"
+#include "planner/measurement_plan.hpp"
 #include "planner/plan_json.hpp"
+#include "planner/plate.hpp"
+#include "planner/registration.hpp"
 
 namespace {
 
 using namespace cmm;
 
-int plan(const std::string& model_path, const std::string& output, planner::PlanInputs inputs) {
-  geometry::ReadResult read = geometry::read_model(model_path);
-  if (const auto* cloud = std::get_if<geometry::PointCloud>(&read.model)) {
-    std::cerr << "cmm-plan: " << model_path << " holds a point cloud (" << cloud->points.rows()
-              << " points, no faces).\n  Meshing a raw scan (thinning and triangulation, thesis Ch. 3-4) is not"
-                 " built yet: give a triangle mesh (STL, PLY, OBJ or OFF).\n";
-    return 2;
+// Wall time of each stage, for the summary's last line.
+struct StageTimes {
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point last = Clock::now();
+  std::vector<std::pair<const char*, double>> stages;
+  void done(const char* stage) {
+    const Clock::time_point now = Clock::now();
+    stages.emplace_back(stage, std::chrono::duration<double>(now - last).count());
+    last = now;
   }
+};
+
+struct Options {
+  std::string model, output, machine, plate, registration, dmis;
+  planner::PlanInputs inputs;
+  bool radius_given = false;
+};
+
+std::string format_mm(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+// The ball the plan is for: the active tip's qualified radius unless --probe-radius says otherwise.
+// Another tip of that radius becomes the active one; a radius no tip has is planned for a copy of
+// the active tip, with a note, so that the plan, the DMIS and the machine description agree.
+void choose_tip(planner::MachineDescription& machine, Options& o) {
+  if (!o.radius_given) {
+    o.inputs.probe_radius = machine.tip().ball_radius_mm;
+    return;
+  }
+  const double r = o.inputs.probe_radius;
+  for (const planner::StylusTip& tip : machine.tips)
+    if (std::abs(tip.ball_radius_mm - r) <= 1e-9) {
+      if (tip.id != machine.active_tip)
+        o.inputs.notes.push_back("tip " + tip.id + " made active: it is the one of radius " + format_mm(r) + " mm");
+      machine.active_tip = tip.id;
+      return;
+    }
+  planner::StylusTip tip = machine.tip();
+  o.inputs.notes.push_back("no tip of the machine has radius " + format_mm(r) + " mm: planned for tip " + tip.id +
+                           " with its ball changed to that radius; qualify such a tip before running the plan");
+  tip.id += "_r" + format_mm(r);
+  tip.ball_radius_mm = r;
+  machine.tips.push_back(tip);
+  machine.active_tip = tip.id;
+}
+
+geometry::TriangleMesh read_mesh(const std::string& path, planner::PlanInputs& inputs) {
+  geometry::ReadResult read = geometry::read_model(path);
+  if (const auto* cloud = std::get_if<geometry::PointCloud>(&read.model))
+    throw std::invalid_argument(path + " holds a point cloud (" + std::to_string(cloud->points.rows()) +
+                                " points, no faces).\n  Meshing a raw scan (thinning and triangulation, thesis Ch. 3-4)"
+                                " is not built yet: give a triangle mesh (STL, PLY, OBJ or OFF).");
   geometry::TriangleMesh mesh = std::get<geometry::TriangleMesh>(std::move(read.model));
-  if (mesh.faces.rows() == 0) {
-    std::cerr << "cmm-plan: " << model_path << ": no usable triangles left after dropping degenerate ones\n";
-    return 2;
-  }
+  if (mesh.faces.rows() == 0)
+    throw std::invalid_argument(path + ": no usable triangles left after dropping degenerate ones");
   mesh.vertices *= inputs.scale;
   if (!mesh.vertices.allFinite()) {
-    std::cerr << "cmm-plan: " << model_path << ": --scale " << inputs.scale
-              << " takes coordinates beyond the range of a double\n";
-    return 2;
+    std::ostringstream message;
+    message << path << ": --scale " << inputs.scale << " takes coordinates beyond the range of a double";
+    throw std::invalid_argument(message.str());
   }
-  inputs.model_file = model_path;
+  inputs.model_file = path;
   inputs.read_report = read.report;
   inputs.vertex_count = static_cast<std::size_t>(mesh.vertices.rows());
   inputs.face_count = static_cast<std::size_t>(mesh.faces.rows());
+  return mesh;
+}
 
-  geometry::FeatureModelOptions options;
-  options.spacing = inputs.spacing;
-  options.features.angle_deg = inputs.feature_angle_deg;
-  const geometry::FeatureModel model = geometry::extract_features(mesh, options);
-
-  inputs.notes.push_back("no registration given: T_M_S is taken as identity (the plan is in the scan frame S)");
-  inputs.notes.push_back("probe windows, approaches and the move program are not computed yet (planner issue)");
-  const nlohmann::json plan = planner::plan_json(model, inputs);
-  // Written beside the target and renamed over it, so a failed write never leaves half a plan.
-  const std::string partial = output + ".partial";
-  {
-    std::ofstream out(partial);
-    out << plan.dump(1) << '\n';
-    out.close();
-    std::error_code renamed;
-    if (out) std::filesystem::rename(partial, output, renamed);
-    if (!out || renamed) {
-      std::error_code ignored;
-      std::filesystem::remove(partial, ignored);
-      std::cerr << "cmm-plan: cannot write " << output << ": " << (renamed ? renamed.message() : std::strerror(errno))
-                << '\n';
-      return 1;
-    }
+// Written beside the target and renamed over it, so a failed write never leaves half a file.
+void write_atomically(const std::string& path, const std::string& text) {
+  const std::string partial = path + ".partial";
+  std::ofstream out(partial);
+  out << text;
+  out.close();
+  std::error_code renamed;
+  if (out) std::filesystem::rename(partial, path, renamed);
+  if (!out || renamed) {
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw std::runtime_error("cannot write " + path + ": " + (renamed ? renamed.message() : std::strerror(errno)));
   }
+}
 
+void print_summary(const Options& o, const StageTimes& times, const geometry::FeatureModel& model, const geometry::ReadReport& read,
+                   const planner::MeasurementPlan& plan, const planner::MachineDescription& machine,
+                   const std::optional<planner::RegistrationResult>& registration) {
   const auto& t = model.topology;
+  const auto& in = o.inputs;
   std::size_t sharp = 0, rim = 0, boundary = 0, convex = 0;
   for (const auto& p : model.points) {
     (p.kind == geometry::EdgeKind::sharp_edge ? sharp : p.kind == geometry::EdgeKind::hole_rim ? rim : boundary)++;
     convex += p.convex && p.kind != geometry::EdgeKind::boundary;
   }
-  std::printf("model      %s: %zu vertices, %zu triangles (scale %g)\n", model_path.c_str(), inputs.vertex_count,
-              inputs.face_count, inputs.scale);
-  std::printf("read       %zu vertices welded, %zu degenerate and %zu duplicate faces dropped\n",
-              read.report.vertices_welded, read.report.degenerate_faces_dropped, read.report.duplicate_faces_dropped);
+  std::printf("model      %s: %zu vertices, %zu triangles (scale %g)\n", o.model.c_str(), in.vertex_count,
+              in.face_count, in.scale);
+  std::printf("read       %zu vertices welded, %zu degenerate and %zu duplicate faces dropped\n", read.vertices_welded,
+              read.degenerate_faces_dropped, read.duplicate_faces_dropped);
   std::printf("topology   %d component(s), %s, %zu boundary edges in %zu loops, %zu non-manifold edges%s\n",
               t.components, t.closed() ? "closed" : "open", t.boundary_edges, model.loops.size(), t.non_manifold_edges,
               t.inconsistently_oriented_edges ? ", ORIENTATION INCONSISTENT" : "");
   std::printf("surface    median dihedral %.2f deg -> %s\n", model.features.median_dihedral_deg,
               model.features.noisy ? "noisy: normals filtered before feature detection" : "clean");
-  std::printf("features   %zu sharp curves over %g deg\n", model.features.curves.size(), inputs.feature_angle_deg);
+  std::printf("features   %zu sharp curves over %g deg\n", model.features.curves.size(), in.feature_angle_deg);
   std::printf("points     %zu reference edge points every %g: %zu sharp edge, %zu hole rim, %zu open boundary; %zu convex\n",
-              model.points.size(), inputs.spacing, sharp, rim, boundary, convex);
+              model.points.size(), in.spacing, sharp, rim, boundary, convex);
   std::size_t bores = 0;
   for (const auto& h : model.holes) bores += h.source == geometry::HoleSource::bore;
   std::printf("holes      %zu hole(s): %zu bore(s) with their wall, %zu open rim(s) whose wall the mesh lacks\n",
@@ -95,7 +148,68 @@ int plan(const std::string& model_path, const std::string& output, planner::Plan
                 geometry::to_string(h.source), h.centre.x(), h.centre.y(), h.centre.z(), 2 * h.radius, depth,
                 h.roundness_mm);
   }
-  std::printf("plan       written to %s (T_M_S = identity: no registration given)\n", output.c_str());
+  if (registration)
+    std::printf("register   %zu corners, RMS %.4f mm%s\n", registration->ids.size(), registration->fit.rms_mm,
+                registration->order_verified ? ", corner order confirmed by the fiducial" : "");
+  else
+    std::printf("register   none given: T_M_S = identity, the plan's machine coordinates are the scan's\n");
+  std::map<std::string, int> methods;
+  for (const auto& e : plan.edges) methods[planner::to_string(e.method)]++;
+  int bored = 0;
+  for (const auto& b : plan.bores) bored += b.planned;
+  std::printf("probe      tip %s, r %g mm, delta %g mm: %d by two touches, %d by face touches, %d not probeable; "
+              "%d of %zu bores\n",
+              machine.active_tip.c_str(), in.probe_radius, in.delta, methods["two_touch"], methods["faces"],
+              methods["none"], bored, plan.bores.size());
+  std::printf("program    %zu touches, clearance plane z %.3f: estimated %.1f s (lower bound %.1f s)\n",
+              plan.program.touches.size(), plan.clearance_z, plan.program.time_s, plan.program.lower_bound_s);
+  std::printf("plan       written to %s%s\n", o.output.c_str(), o.dmis.empty() ? "" : (", DMIS to " + o.dmis).c_str());
+  std::printf("time      ");
+  for (const auto& [stage, seconds] : times.stages) std::printf(" %s %.3f s", stage, seconds);
+  std::printf("\n");
+}
+
+int plan(Options o) {
+  planner::PlanInputs& inputs = o.inputs;
+  StageTimes times;
+  const geometry::TriangleMesh mesh = read_mesh(o.model, inputs);
+  times.done("read");
+  planner::MachineDescription machine =
+      o.machine.empty() ? planner::default_machine() : planner::read_machine(o.machine);
+  if (o.machine.empty()) inputs.notes.push_back("no --machine given: the default machine description (config/machine.json)");
+  choose_tip(machine, o);
+
+  std::optional<planner::RegistrationResult> registration;
+  Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
+  if (!o.registration.empty()) {
+    const planner::RegistrationInput corners = planner::read_registration(o.registration);
+    std::optional<planner::Plate> plate;
+    if (!o.plate.empty()) plate = planner::read_plate(o.plate);
+    registration = planner::fit_registration(corners, plate ? &*plate : nullptr);
+    T_M_S = registration->T_M_S;
+  } else {
+    inputs.notes.push_back("no registration given: T_M_S is taken as identity (machine coordinates = scan coordinates)");
+  }
+
+  geometry::FeatureModelOptions feature_options;
+  feature_options.spacing = inputs.spacing;
+  feature_options.features.angle_deg = inputs.feature_angle_deg;
+  const geometry::FeatureModel model = geometry::extract_features(mesh, feature_options);
+  times.done("features");
+
+  planner::MeasurementPlanOptions plan_options;
+  plan_options.touch.radius = inputs.probe_radius;
+  plan_options.touch.delta = inputs.delta;
+  const planner::MeasurementPlan plan = planner::plan_measurement(model, mesh, T_M_S, machine, plan_options);
+  times.done("plan");
+
+  const nlohmann::json registration_json = registration ? planner::to_json(*registration) : nlohmann::json(nullptr);
+  write_atomically(o.output, planner::plan_json(model, inputs, &plan, &machine, registration_json).dump(1) + "\n");
+  if (!o.dmis.empty())
+    planner::write_dmis_file(o.dmis, plan.program, machine, planner::dmis_features(plan.program, model.holes),
+                             {"cmm-plan", std::filesystem::path(o.model).stem().string()});
+  times.done("write");
+  print_summary(o, times, model, inputs.read_report, plan, machine, registration);
   return 0;
 }
 
@@ -103,27 +217,47 @@ int plan(const std::string& model_path, const std::string& output, planner::Plan
 
 int main(int argc, char** argv) {
   CLI::App app{"cmm-plan: plan the CMM re-measurement of a scanned part's edges and holes (no machine)"};
-  std::string model_path, output;
-  planner::PlanInputs inputs;
-  app.add_option("MODEL", model_path, "reference mesh: STL, PLY, OBJ or OFF")->required()->check(CLI::ExistingFile);
-  app.add_option("-o,--output", output, "plan JSON to write")->required();
+  Options o;
+  planner::PlanInputs& inputs = o.inputs;
+  app.add_option("MODEL", o.model, "reference mesh: STL, PLY, OBJ or OFF")->required()->check(CLI::ExistingFile);
+  app.add_option("-o,--output", o.output, "plan JSON to write")->required();
   app.add_option("--scale", inputs.scale, "multiply coordinates by this (unitless models to mm)")
       ->check(CLI::PositiveNumber);
   app.add_option("--spacing", inputs.spacing, "distance between reference edge points, mm")
       ->check(CLI::PositiveNumber);
   app.add_option("--feature-angle", inputs.feature_angle_deg, "dihedral angle above which an edge is sharp, degrees")
       ->check(CLI::Range(1.0, 179.0));
-  app.add_option("--probe-radius", inputs.probe_radius, "stylus ball radius r, mm")->check(CLI::PositiveNumber);
-  app.add_option("--delta", inputs.delta, "bound on the reference points' error, mm")->check(CLI::PositiveNumber);
+  app.add_option("--probe-radius", inputs.probe_radius,
+                 "stylus ball radius r, mm (default: the machine's active tip's qualified radius)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--delta", inputs.delta, "bound on the reference points' error in M, mm")->check(CLI::PositiveNumber);
+  app.add_option("--machine", o.machine, "machine description (default: config/machine.json, built in)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--registration", o.registration, "base-plate corners in S and M (docs/registration.md)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--plate", o.plate, "plate description; overrides the one named in the registration file")
+      ->check(CLI::ExistingFile);
+  app.add_option("--dmis", o.dmis, "also write the move program as DMIS (docs/dmis.md)");
   CLI11_PARSE(app, argc, argv);
+  if (!o.plate.empty() && o.registration.empty()) {
+    std::cerr << "cmm-plan: --plate checks a corner fit and needs --registration corners.json\n";
+    return 2;
+  }
+  o.radius_given = app.count("--probe-radius") > 0;
   inputs.delta_source = app.count("--delta") ? "given with --delta" : "default: laser scanner noise bound (thesis Ch. 5)";
   try {
-    return plan(model_path, output, inputs);
-  } catch (const cmm::geometry::FileError& error) {
+    return plan(o);
+  } catch (const geometry::FileError& error) {
     std::cerr << "cmm-plan: " << error.what() << '\n';
     return 2;
-  } catch (const std::exception& error) {  // out of memory and the like: say so, no core dump
-    std::cerr << "cmm-plan: " << model_path << ": " << error.what() << '\n';
+  } catch (const planner::RegistrationError& error) {
+    std::cerr << "cmm-plan: " << o.registration << ": registration refused: " << error.what() << '\n';
+    return 2;
+  } catch (const std::invalid_argument& error) {  // an input the planner cannot use, named by the message
+    std::cerr << "cmm-plan: " << error.what() << '\n';
+    return 2;
+  } catch (const std::exception& error) {  // out of memory, a failed write and the like: say so, no core dump
+    std::cerr << "cmm-plan: " << o.model << ": " << error.what() << '\n';
     return 1;
   }
 }

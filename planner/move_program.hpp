@@ -31,7 +31,10 @@ struct MoveProgram {
   double lower_bound_s = 0;  // fixed per-touch costs plus a minimum spanning tree of the travel
 };
 
-// Orders the touches to minimise machine time and expands the motions between them.
-MoveProgram build_program(std::vector<Touch> touches, const MachineDescription& machine, const Vec3& home);
+// Orders the touches to minimise machine time and expands the motions between them. The rises,
+// descents, searches and retracts cost the same in any order; only the travel on the clearance
+// plane depends on it, so that is what is ordered and bounded.
+MoveProgram build_program(std::vector<Touch> touches, const MachineDescription& machine, const Vec3& home,
+                          double clearance_z);
 
 }  // namespace cmm::planner

@@ -1,5 +1,4 @@
-// Serialises the feature model into the plan JSON; windows, approaches, registration and the move
-// program stay null until the planner computes them.
+// Serialises the feature model and the measurement plan into the plan JSON.
 #include "planner/plan_json.hpp"
 
 #include <cmath>
@@ -13,7 +12,59 @@ using nlohmann::json;
 json vec(const geometry::Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
 double degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
 
+json window_json(const ProbeWindow& w) {
+  return {{"axis", vec(w.axis)},
+          {"half_angle_deg", degrees(w.half_angle_rad)},
+          {"plane_normal", vec(w.plane_normal)},
+          {"margin_deg", degrees(w.margin_rad)},
+          {"margin_up_deg", degrees(w.margin_up_rad)},
+          {"margin_down_deg", degrees(w.margin_down_rad)},
+          {"bisector", vec(w.bisector)},
+          {"exact_half_angle_deg", degrees(w.exact_half_angle_rad)}};
+}
+
+json touch_ids(const std::vector<Touch>& touches) {
+  json ids = json::array();
+  for (const Touch& t : touches) ids.push_back(t.id);
+  return ids;
+}
+
+void add_edge_plan(json& point, const EdgePlan& plan) {
+  point["method"] = to_string(plan.method);
+  point["probeable"] = plan.method != EdgeMethod::none;
+  point["reason"] = plan.reason.empty() ? json(nullptr) : json(plan.reason);
+  point["window"] = plan.window ? window_json(*plan.window) : json(nullptr);
+  if (plan.method == EdgeMethod::two_touch) {
+    point["approach"] = {vec(plan.touches[0].direction), vec(plan.touches[1].direction)};
+    point["beta_deg"] = {degrees(plan.beta_rad[0]), degrees(plan.beta_rad[1])};
+  }
+  point["touches"] = touch_ids(plan.touches);
+}
+
+void add_bore_plan(json& hole, const BorePlan& plan) {
+  hole["bore"] = plan.planned ? json{{"depth_mm", plan.depth_mm}, {"touches", touch_ids(plan.touches)}} : json(nullptr);
+  hole["bore_reason"] = plan.planned ? json(nullptr) : json(plan.reason);
+}
+
 }  // namespace
+
+json to_json(const Touch& t, double clearance_z, double probe_speed_mm_s) {
+  json j = {{"id", t.id},
+            {"target", to_string(t.target)},
+            {"face", t.face},
+            {"surface_point", vec(t.surface_point)},
+            {"direction", vec(t.direction)},
+            {"nominal_centre", vec(t.nominal_centre)},
+            {"above", vec(geometry::Vec3(t.start.x(), t.start.y(), clearance_z))},
+            {"start", vec(t.start)},
+            {"max_travel_mm", t.max_travel_mm},
+            {"speed_mm_s", probe_speed_mm_s},
+            {"retract_mm", t.retract_mm}};
+  if (t.edge_point >= 0) j["edge_point"] = t.edge_point;
+  if (t.hole >= 0) j["hole"] = t.hole;
+  if (t.corner >= 0) j["corner"] = t.corner;
+  return j;
+}
 
 json to_json(const geometry::EdgePoint& p) {
   return {
@@ -52,10 +103,11 @@ json to_json(const geometry::Hole& h) {
   };
 }
 
-json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs) {
+json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, const MeasurementPlan* plan,
+               const MachineDescription* machine, const json& registration) {
   const auto& t = model.topology;
   const auto& r = inputs.read_report;
-  json plan = {
+  json out = {
       {"schema", plan_schema_id},
       {"frame", "S"},
       {"model",
@@ -84,16 +136,28 @@ json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs) {
       {"probe_radius", inputs.probe_radius},
       {"delta", inputs.delta},
       {"delta_source", inputs.delta_source},
-      {"registration", nullptr},
+      {"registration", registration},
       {"edge_points", json::array()},
       {"holes", json::array()},
       {"program", json::array()},
       {"estimate", nullptr},
       {"notes", inputs.notes},
   };
-  for (const auto& p : model.points) plan["edge_points"].push_back(to_json(p));
-  for (const auto& h : model.holes) plan["holes"].push_back(to_json(h));
-  return plan;
+  for (const auto& p : model.points) out["edge_points"].push_back(to_json(p));
+  for (const auto& h : model.holes) out["holes"].push_back(to_json(h));
+  if (!plan || !machine) return out;
+  for (std::size_t i = 0; i < plan->edges.size(); ++i) add_edge_plan(out["edge_points"][i], plan->edges[i]);
+  for (std::size_t i = 0; i < plan->bores.size(); ++i) add_bore_plan(out["holes"][i], plan->bores[i]);
+  out["machine"] = to_json(*machine);
+  out["clearance_z"] = plan->clearance_z;
+  out["floor_z"] = plan->floor_z;
+  out["home"] = vec(plan->program.home);
+  for (const Touch& t : plan->program.touches)
+    out["program"].push_back(to_json(t, plan->clearance_z, machine->probe_speed_mm_s));
+  out["estimate"] = {{"time_s", plan->program.time_s}, {"lower_bound_s", plan->program.lower_bound_s},
+                     {"touches", plan->program.touches.size()}};
+  for (const std::string& note : plan->notes) out["notes"].push_back(note);
+  return out;
 }
 
 }  // namespace cmm::planner

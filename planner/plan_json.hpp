@@ -10,6 +10,7 @@
 
 #include "geometry/feature_model.hpp"
 #include "geometry/mesh_io.hpp"
+#include "planner/measurement_plan.hpp"
 
 namespace cmm::planner {
 
@@ -31,6 +32,12 @@ struct PlanInputs {
 
 nlohmann::json to_json(const geometry::EdgePoint& point);
 nlohmann::json to_json(const geometry::Hole& hole);
-nlohmann::json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs);
+nlohmann::json to_json(const Touch& touch, double clearance_z, double probe_speed_mm_s);
+
+// Without a measurement plan the windows, approaches, program and estimate stay null or empty;
+// `registration` is the registration's JSON, or null when T_M_S is assumed to be the identity.
+nlohmann::json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs,
+                         const MeasurementPlan* plan = nullptr, const MachineDescription* machine = nullptr,
+                         const nlohmann::json& registration = nullptr);
 
 }  // namespace cmm::planner

@@ -6,7 +6,9 @@ import jsonschema
 
 schema_path, *plans = sys.argv[1:]
 with open(schema_path) as f:
-    validator = jsonschema.Draft202012Validator(json.load(f))
+    schema = json.load(f)
+jsonschema.Draft202012Validator.check_schema(schema)
+validator = jsonschema.Draft202012Validator(schema)
 failed = False
 for path in plans:
     with open(path) as f:

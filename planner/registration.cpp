@@ -1,0 +1,504 @@
+// corners.json in, T_M_S out. Every check that can say which corner is wrong runs before the fit,
+// because a least-squares fit spreads one bad corner over all residuals and hides it.
+#include "planner/registration.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <numbers>
+#include <set>
+
+#include "geometry/file_error.hpp"
+#include "planner/json_fields.hpp"
+#include "planner/number_text.hpp"
+
+namespace cmm::planner {
+namespace {
+
+using geometry::FileError;
+using nlohmann::json;
+using Kind = RegistrationError::Kind;
+
+
+std::string corner_name(int id) { return "corner " + std::to_string(id); }
+
+std::string id_list(const std::vector<int>& ids) {
+  std::string s;
+  for (std::size_t i = 0; i < ids.size(); ++i) s += (i ? ", " : "") + std::to_string(ids[i]);
+  return s;
+}
+
+// --- corners.json ----------------------------------------------------------------------------
+
+[[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& message) {
+  fail_field(source, field, message);
+}
+
+double number(const json& j, const std::string& source, const std::string& field) {
+  if (!j.is_number()) fail(source, field, "expected a number");
+  const double value = j.get<double>();
+  if (!std::isfinite(value)) fail(source, field, "not a finite number");
+  return value;
+}
+
+double positive(const json& j, const std::string& source, const std::string& field) {
+  const double value = number(j, source, field);
+  if (!(value > 0)) fail(source, field, "must be positive, got " + fixed(value, 4));
+  return value;
+}
+
+Vec3 vec3(const json& j, const std::string& source, const std::string& field) {
+  if (!j.is_array() || j.size() != 3) fail(source, field, "expected [x, y, z]");
+  static const char* axis[] = {"x", "y", "z"};
+  Vec3 v;
+  for (int i = 0; i < 3; ++i) v(i) = number(j[static_cast<std::size_t>(i)], source, field + "." + axis[i]);
+  return v;
+}
+
+// --- checks --------------------------------------------------------------------------------
+
+struct Frame {
+  char name;         // 'S' or 'M'
+  const char* long_name;  // "scan (S)"
+  std::vector<Vec3> points;
+};
+
+void check_finite(const std::vector<int>& ids, const Frame& frame) {
+  static const char* axis[] = {"x", "y", "z"};
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      const double v = frame.points[i](a);
+      if (std::isfinite(v)) continue;
+      throw RegistrationError(Kind::not_finite, {ids[i]},
+                              corner_name(ids[i]) + ": " + frame.long_name + " " + axis[a] + " is " +
+                                  (std::isnan(v) ? "NaN" : "infinite") + "; measure that corner again");
+    }
+}
+
+double extent_of(const std::vector<Vec3>& points) {
+  double extent = 0;
+  for (std::size_t a = 0; a < points.size(); ++a)
+    for (std::size_t b = a + 1; b < points.size(); ++b) extent = std::max(extent, (points[a] - points[b]).norm());
+  return extent;
+}
+
+void check_degenerate(const std::vector<int>& ids, const Frame& frame, double relative) {
+  const double extent = extent_of(frame.points);
+  const double limit = relative * extent;
+  const std::string frame_name(1, frame.name);
+  for (std::size_t a = 0; a < ids.size(); ++a)
+    for (std::size_t b = a + 1; b < ids.size(); ++b) {
+      const double d = (frame.points[a] - frame.points[b]).norm();
+      if (d <= limit)
+        throw RegistrationError(Kind::coincident, {ids[a], ids[b]},
+                                "corners " + std::to_string(ids[a]) + " and " + std::to_string(ids[b]) +
+                                    " coincide in " + frame_name + " (" + fixed(d, 3) + " mm apart, the corners span " +
+                                    fixed(extent) + " mm): the same corner given twice?");
+    }
+  // Collinear: the largest distance from the principal line through the centroid.
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : frame.points) centroid += p;
+  centroid /= static_cast<double>(frame.points.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : frame.points) scatter += (p - centroid) * (p - centroid).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+  const Vec3 axis = eigen.eigenvectors().col(2);
+  double farthest = 0;
+  for (const Vec3& p : frame.points) farthest = std::max(farthest, ((p - centroid) - (p - centroid).dot(axis) * axis).norm());
+  if (farthest <= limit)
+    throw RegistrationError(Kind::collinear, ids,
+                            "corners " + id_list(ids) + " are collinear in " + frame_name + ": the farthest is " +
+                                fixed(farthest, 3) + " mm off their common line (needs more than " + fixed(limit, 3) +
+                                " mm, " + fixed(relative, 4) + " of their " + fixed(extent) +
+                                " mm extent); the rotation about that line is undetermined");
+}
+
+// "side corner 2–corner 3" or "diagonal corner 1–corner 3"; without a plate, "distance …".
+std::string length_name(const Plate* plate, int a, int b) {
+  const char* what = !plate ? "distance " : plate->adjacent(a, b) ? "side " : "diagonal ";
+  return what + corner_name(std::min(a, b)) + "–" + corner_name(std::max(a, b));
+}
+
+// One corner that every failing length involves is most likely the one that is off.
+std::string common_corner_hint(const std::vector<std::pair<int, int>>& failing) {
+  if (failing.size() < 2) return "";
+  for (int candidate : {failing[0].first, failing[0].second}) {
+    if (std::all_of(failing.begin(), failing.end(),
+                    [&](const auto& p) { return p.first == candidate || p.second == candidate; }))
+      return " (" + corner_name(candidate) + " is in every one: it is probably the one that is off)";
+  }
+  return "";
+}
+
+void check_nominal_lengths(const std::vector<int>& ids, const Frame& frame, const Plate& plate, double tolerance) {
+  std::vector<std::pair<int, int>> failing;
+  std::string message;
+  std::set<int> named;
+  for (std::size_t a = 0; a < ids.size(); ++a)
+    for (std::size_t b = a + 1; b < ids.size(); ++b) {
+      const double measured = (frame.points[a] - frame.points[b]).norm();
+      const double nominal = (plate.corner(ids[a]) - plate.corner(ids[b])).norm();
+      if (std::abs(measured - nominal) <= tolerance) continue;
+      failing.emplace_back(ids[a], ids[b]);
+      named.insert(ids[a]);
+      named.insert(ids[b]);
+      message += (message.empty() ? "" : "; ") + length_name(&plate, ids[a], ids[b]) + " is " + fixed(measured) +
+                 " mm in " + frame.name + ", the plate says " + fixed(nominal) + " mm";
+    }
+  if (failing.empty()) return;
+  throw RegistrationError(Kind::nominal_length, {named.begin(), named.end()},
+                          message + " (tolerance " + fixed(tolerance) + " mm)" + common_corner_hint(failing));
+}
+
+void check_frame_lengths(const std::vector<int>& ids, const Frame& s, const Frame& m, const Plate* plate,
+                         double tolerance) {
+  std::vector<std::pair<int, int>> failing;
+  std::string message;
+  std::set<int> named;
+  for (std::size_t a = 0; a < ids.size(); ++a)
+    for (std::size_t b = a + 1; b < ids.size(); ++b) {
+      const double in_s = (s.points[a] - s.points[b]).norm(), in_m = (m.points[a] - m.points[b]).norm();
+      if (std::abs(in_s - in_m) <= tolerance) continue;
+      failing.emplace_back(ids[a], ids[b]);
+      named.insert(ids[a]);
+      named.insert(ids[b]);
+      message += (message.empty() ? "" : "; ") + length_name(plate, ids[a], ids[b]) + " is " + fixed(in_s) +
+                 " mm in S but " + fixed(in_m) + " mm in M";
+    }
+  if (failing.empty()) return;
+  throw RegistrationError(Kind::frame_length, {named.begin(), named.end()},
+                          message + " (tolerance " + fixed(tolerance) + " mm)" + common_corner_hint(failing) +
+                              "; a wrong --scale or unit in the scan changes every length by one factor");
+}
+
+// Newell's normal of the corners taken in the plate's (counter-clockwise) id order.
+Vec3 order_normal(const std::vector<int>& ids, const std::vector<Vec3>& points) {
+  std::vector<std::size_t> order(ids.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return ids[a] < ids[b]; });
+  Vec3 n = Vec3::Zero();
+  for (std::size_t i = 0; i < order.size(); ++i)
+    n += points[order[i]].cross(points[order[(i + 1) % order.size()]]);
+  return n;
+}
+
+std::string sorted_ids(std::vector<int> ids) {
+  std::sort(ids.begin(), ids.end());
+  return id_list(ids);
+}
+
+std::string fiducial_name(const Plate& plate) {
+  if (plate.fiducial.kind == PlateFiducial::Kind::chamfer)
+    return "the chamfer at corner " + std::to_string(plate.fiducial.corner);
+  // Name the hole by its nearest corner: that is the corner it stands for.
+  int nearest = 1;
+  const Vec3 centre(plate.fiducial.centre.x(), plate.fiducial.centre.y(), plate.top_z());
+  for (int id = 2; id <= plate.corner_count(); ++id)
+    if ((plate.corner(id) - centre).norm() < (plate.corner(nearest) - centre).norm()) nearest = id;
+  return "the hole near corner " + std::to_string(nearest);
+}
+
+int fiducial_corner(const Plate& plate) {
+  if (plate.fiducial.kind == PlateFiducial::Kind::chamfer) return plate.fiducial.corner;
+  int nearest = 1;
+  const Vec3 centre(plate.fiducial.centre.x(), plate.fiducial.centre.y(), plate.top_z());
+  for (int id = 2; id <= plate.corner_count(); ++id)
+    if ((plate.corner(id) - centre).norm() < (plate.corner(nearest) - centre).norm()) nearest = id;
+  return nearest;
+}
+
+bool within(const FiducialDeviation& d, double tolerance) {
+  return d.off_mm <= tolerance && d.outside_mm <= tolerance;
+}
+
+FiducialCheck check_fiducial(const Plate& plate, const std::vector<int>& ids, const Frame& frame,
+                             const Vec3& measured, const RegistrationOptions& options) {
+  const Eigen::Isometry3d T_X_P = fit_plate_pose(plate, ids, frame.points);
+  FiducialCheck check;
+  check.frame = frame.name;
+  check.measured = measured;
+  check.predicted = T_X_P * fiducial_geometry(plate).point;
+  check.deviation = fiducial_deviation(plate, T_X_P.inverse() * measured);
+  check.tolerance_mm = options.fiducial_tolerance_mm;
+  if (within(check.deviation, options.fiducial_tolerance_mm)) return check;
+
+  const int n = plate.corner_count();
+  const int home = fiducial_corner(plate);
+  std::string message = "fiducial in " + std::string(1, frame.name) + ": " + fiducial_name(plate) +
+                        " is not where " + corner_name(home) + " should be: the measured point is " +
+                        fixed(check.deviation.off_mm) + " mm off " +
+                        (plate.fiducial.kind == PlateFiducial::Kind::chamfer ? "the chamfer face's plane"
+                                                                             : "the hole's axis") +
+                        " and " + fixed(check.deviation.outside_mm) +
+                        " mm beyond its extent, where the plate pose fitted to the " + frame.name +
+                        " corners puts it (tolerance " + fixed(options.fiducial_tolerance_mm) + " mm)";
+  // Try every relabelling of the corners by a cyclic shift: the corner labelled `id` taken as the
+  // plate's corner id + k. One that fits the corners and puts the fiducial right is the diagnosis.
+  for (int k = 1; k < n; ++k) {
+    std::vector<int> shifted;
+    for (int id : ids) shifted.push_back((id - 1 + k) % n + 1);
+    const RigidFit refit = fit_rigid(
+        [&] {
+          std::vector<Vec3> nominal;
+          for (int id : shifted) nominal.push_back(plate.corner(id));
+          return nominal;
+        }(),
+        frame.points);
+    if (refit.rms_mm > options.length_tolerance_mm) continue;
+    const FiducialDeviation d = fiducial_deviation(plate, refit.transform.inverse() * measured);
+    if (!within(d, options.fiducial_tolerance_mm)) continue;
+    const int labelled = (n - k) % n + 1;  // the label whose shifted id is 1
+    throw RegistrationError(Kind::fiducial, {labelled, 1},
+                            message + "; the corner order looks shifted by " + std::to_string(k) +
+                                ": the fiducial fits if the corner labelled " + std::to_string(labelled) +
+                                " is the plate's " + corner_name(1) + "; relabel the " + frame.name + " corners");
+  }
+  std::string symmetric;
+  for (int k : symmetry_shifts(plate)) symmetric += (symmetric.empty() ? "" : " or ") + std::to_string(k);
+  const std::string hint =
+      symmetric.empty() ? ""
+                        : "; the plate looks the same with its corners shifted by " + symmetric +
+                              ", so if the fiducial was probed where these corners put it, it was probed at a plain "
+                              "corner and the corner order is shifted";
+  throw RegistrationError(Kind::fiducial, {home},
+                          message + "; no cyclic relabelling of the corners explains it" + hint +
+                              "; otherwise check the fiducial measurement and the plate description");
+}
+
+json matrix_json(const Eigen::Matrix4d& m) {
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
+  return rows;
+}
+
+json vec_json(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+}  // namespace
+
+RegistrationInput registration_from_json(const json& j, const std::string& source,
+                                         const std::filesystem::path& base_dir) {
+  if (!j.is_object()) fail(source, "registration", "expected an object");
+  only_known_keys(j, source, "",
+                  {"description", "plate", "noise_mm", "noise_scan_mm", "noise_machine_mm", "corners", "fiducial",
+                   "scan_up", "rms_tolerance_mm", "length_tolerance_mm", "fiducial_tolerance_mm"});
+  RegistrationInput input;
+  input.source = source;
+  if (j.contains("plate") && !j["plate"].is_null()) {
+    const json& p = j["plate"];
+    if (p.is_string()) {
+      std::filesystem::path file = p.get<std::string>();
+      if (file.is_relative()) file = base_dir / file;
+      input.plate = read_plate(file);
+    } else if (p.is_object()) {
+      input.plate = plate_from_json(p, source + ": plate");
+    } else {
+      fail(source, "plate", "expected a path to plate.json or an inline plate object");
+    }
+  }
+
+  if (j.contains("noise_mm")) input.noise_scan_mm = input.noise_machine_mm = positive(j["noise_mm"], source, "noise_mm");
+  if (j.contains("noise_scan_mm")) input.noise_scan_mm = positive(j["noise_scan_mm"], source, "noise_scan_mm");
+  if (j.contains("noise_machine_mm"))
+    input.noise_machine_mm = positive(j["noise_machine_mm"], source, "noise_machine_mm");
+  if (!j.contains("noise_mm") && !(j.contains("noise_scan_mm") && j.contains("noise_machine_mm")))
+    input.notes.push_back("noise_mm not given: the predicted uncertainty assumes σ = " + fixed(input.noise_scan_mm, 3) +
+                          " mm (S) and " + fixed(input.noise_machine_mm, 3) + " mm (M) per coordinate");
+
+  if (!j.contains("corners")) fail(source, "corners", "missing");
+  const json& corners = j["corners"];
+  if (!corners.is_array()) fail(source, "corners", "expected an array of {\"id\", \"scan\", \"machine\"}");
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const std::string field = "corners[" + std::to_string(i) + "]";
+    const json& c = corners[i];
+    if (!c.is_object()) fail(source, field, "expected {\"id\", \"scan\", \"machine\"}");
+    only_known_keys(c, source, field, {"id", "scan", "machine"});
+    CornerPair pair;
+    if (!c.contains("id") || !c["id"].is_number_integer()) fail(source, field + ".id", "expected an integer corner id");
+    pair.id = c["id"].get<int>();
+    if (!c.contains("scan")) fail(source, field + ".scan", "missing");
+    if (!c.contains("machine")) fail(source, field + ".machine", "missing");
+    pair.scan = vec3(c["scan"], source, field + ".scan");
+    pair.machine = vec3(c["machine"], source, field + ".machine");
+    input.corners.push_back(pair);
+  }
+
+  if (j.contains("fiducial") && !j["fiducial"].is_null()) {
+    const json& f = j["fiducial"];
+    if (!f.is_object()) fail(source, "fiducial", "expected {\"machine\": [x, y, z], \"scan\": [x, y, z]}");
+    only_known_keys(f, source, "fiducial", {"machine", "scan"});
+    if (f.contains("machine")) input.fiducial_machine = vec3(f["machine"], source, "fiducial.machine");
+    if (f.contains("scan")) input.fiducial_scan = vec3(f["scan"], source, "fiducial.scan");
+  }
+  if (j.contains("scan_up")) {
+    const Vec3 up = vec3(j["scan_up"], source, "scan_up");
+    if (!(up.norm() > 0)) fail(source, "scan_up", "must not be zero");
+    input.scan_up = up.normalized();
+  }
+  RegistrationOptions& o = input.options;
+  if (j.contains("rms_tolerance_mm")) o.rms_tolerance_mm = positive(j["rms_tolerance_mm"], source, "rms_tolerance_mm");
+  if (j.contains("length_tolerance_mm"))
+    o.length_tolerance_mm = positive(j["length_tolerance_mm"], source, "length_tolerance_mm");
+  if (j.contains("fiducial_tolerance_mm"))
+    o.fiducial_tolerance_mm = positive(j["fiducial_tolerance_mm"], source, "fiducial_tolerance_mm");
+  return input;
+}
+
+RegistrationInput read_registration(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw FileError::whole(file, "cannot open the registration input");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw FileError::at_byte(file, e.byte, "not valid JSON");
+  }
+  return registration_from_json(j, file.string(), file.parent_path());
+}
+
+RegistrationResult fit_registration(const RegistrationInput& input, const Plate* plate_given) {
+  const Plate* plate = plate_given ? plate_given : input.plate ? &*input.plate : nullptr;
+  const RegistrationOptions& options = input.options;
+  const auto& corners = input.corners;
+  if (corners.size() < 3)
+    throw RegistrationError(Kind::too_few_corners, {},
+                            "registration needs at least three corners measured in both S and M, got " +
+                                std::to_string(corners.size()));
+  std::vector<int> ids;
+  Frame s{'S', "scan (S)", {}}, m{'M', "machine (M)", {}};
+  for (const CornerPair& c : corners) {
+    if (std::find(ids.begin(), ids.end(), c.id) != ids.end())
+      throw RegistrationError(Kind::bad_corner_id, {c.id}, corner_name(c.id) + " is listed twice");
+    if (plate && (c.id < 1 || c.id > plate->corner_count()))
+      throw RegistrationError(Kind::bad_corner_id, {c.id},
+                              corner_name(c.id) + " is not a corner of the plate (ids 1–" +
+                                  std::to_string(plate->corner_count()) + ")");
+    ids.push_back(c.id);
+    s.points.push_back(c.scan);
+    m.points.push_back(c.machine);
+  }
+  check_finite(ids, s);
+  check_finite(ids, m);
+  if (input.fiducial_machine && !input.fiducial_machine->allFinite())
+    throw RegistrationError(Kind::not_finite, {}, "the fiducial's machine (M) position is not finite");
+  if (input.fiducial_scan && !input.fiducial_scan->allFinite())
+    throw RegistrationError(Kind::not_finite, {}, "the fiducial's scan (S) position is not finite");
+  check_degenerate(ids, s, options.degenerate_tolerance);
+  check_degenerate(ids, m, options.degenerate_tolerance);
+  if (plate) {
+    // M first: the machine's corners are the accurate ones, so a disagreement there is the plainer message.
+    check_nominal_lengths(ids, m, *plate, options.length_tolerance_mm);
+    check_nominal_lengths(ids, s, *plate, options.length_tolerance_mm);
+  }
+  check_frame_lengths(ids, s, m, plate, options.length_tolerance_mm);
+
+  if (plate) {
+    // The probe comes down along −z onto the plate's top, so +z of M is the top's side; a rotation
+    // cannot turn counter-clockwise into clockwise, so a clockwise order is a mirrored one.
+    if (!(order_normal(ids, m.points).z() > 0))
+      throw RegistrationError(Kind::mirrored, ids,
+                              "corners " + sorted_ids(ids) +
+                                  " go clockwise seen from above (+z) in M, but the plate lists its corners "
+                                  "counter-clockwise seen from its top: the corner order is mirrored");
+    if (input.scan_up && !(order_normal(ids, s.points).dot(*input.scan_up) > 0))
+      throw RegistrationError(Kind::mirrored, ids,
+                              "corners " + sorted_ids(ids) +
+                                  " go clockwise seen from scan_up in S, but the plate lists its corners "
+                                  "counter-clockwise seen from its top: the corner order (or the scan) is mirrored");
+  }
+
+  RegistrationResult result;
+  result.ids = ids;
+  result.fit = fit_rigid(s.points, m.points);
+  result.T_M_S = result.fit.transform;
+  result.predicted = predict_rigid_fit_uncertainty(s.points, result.T_M_S, input.noise_scan_mm, input.noise_machine_mm);
+  result.notes = input.notes;
+
+  if (input.scan_up && !((result.T_M_S.linear() * *input.scan_up).z() > 0))
+    throw RegistrationError(Kind::mirrored, ids,
+                            "T_M_S turns the scan's up direction (scan_up) downward in M: the corner order is "
+                            "mirrored between S and M, or the scan is mirrored");
+
+  if (result.fit.rms_mm > options.rms_tolerance_mm) {
+    const auto worst = std::max_element(result.fit.residual_norms.begin(), result.fit.residual_norms.end()) -
+                       result.fit.residual_norms.begin();
+    throw RegistrationError(Kind::rms, {ids[static_cast<std::size_t>(worst)]},
+                            "the fit's RMS " + fixed(result.fit.rms_mm, 3) + " mm is over the tolerance " +
+                                fixed(options.rms_tolerance_mm, 3) + " mm (expected about " +
+                                fixed(result.predicted.expected_rms_mm, 3) + " mm from the stated noise); the largest "
+                                "residual is " + corner_name(ids[static_cast<std::size_t>(worst)]) + "'s, " +
+                                fixed(result.fit.residual_norms[static_cast<std::size_t>(worst)], 3) + " mm");
+  }
+
+  if (plate) {
+    result.T_M_P = fit_plate_pose(*plate, ids, m.points);
+    if (input.fiducial_machine) {
+      result.fiducial_checks.push_back(check_fiducial(*plate, ids, m, *input.fiducial_machine, options));
+      result.order_verified = true;
+    } else {
+      result.notes.push_back("the corner order in M is not verified: no fiducial measured in M (" +
+                             fiducial_name(*plate) + ")");
+    }
+    if (input.fiducial_scan)
+      result.fiducial_checks.push_back(check_fiducial(*plate, ids, s, *input.fiducial_scan, options));
+    else if (!input.scan_up)
+      result.notes.push_back("the corner order in S is checked only against M's: no fiducial and no scan_up in S");
+  } else {
+    result.notes.push_back("no plate description: the corners are checked only against each other, not against the "
+                           "plate's size, handedness or fiducial");
+  }
+  return result;
+}
+
+json to_json(const RegistrationResult& r) {
+  json residuals = json::array(), corners = json::array();
+  for (std::size_t i = 0; i < r.ids.size(); ++i) {
+    residuals.push_back(r.fit.residual_norms[i]);
+    corners.push_back({{"id", r.ids[i]}, {"residual_mm", vec_json(r.fit.residuals[i])},
+                       {"norm_mm", r.fit.residual_norms[i]}});
+  }
+  const RigidFitUncertainty& p = r.predicted;
+  json covariance = json::array();
+  for (int row = 0; row < 6; ++row) {
+    json line = json::array();
+    for (int col = 0; col < 6; ++col) line.push_back(p.covariance(row, col));
+    covariance.push_back(line);
+  }
+  json fiducial = json::array();
+  for (const FiducialCheck& f : r.fiducial_checks)
+    fiducial.push_back({{"frame", std::string(1, f.frame)},
+                        {"measured", vec_json(f.measured)},
+                        {"predicted", vec_json(f.predicted)},
+                        {"off_mm", f.deviation.off_mm},
+                        {"outside_mm", f.deviation.outside_mm},
+                        {"tolerance_mm", f.tolerance_mm}});
+  return {
+      {"T_M_S", matrix_json(r.T_M_S.matrix())},
+      {"residuals_mm", residuals},
+      {"rms_mm", r.fit.rms_mm},
+      {"corners", corners},
+      {"predicted",
+       {{"sigma_scan_mm", p.sigma_from_mm},
+        {"sigma_machine_mm", p.sigma_to_mm},
+        {"sigma_eff_mm", p.sigma_eff_mm},
+        {"rotation_rms_rad", p.rotation_rms_rad},
+        {"rotation_rms_deg", p.rotation_rms_rad * 180 / std::numbers::pi},
+        {"rotation_std_rad", vec_json(p.rotation_std_rad)},
+        {"translation_rms_at_centroid_mm", p.translation_rms_at_centroid_mm},
+        {"translation_rms_at_origin_mm", p.translation_rms_at_origin_mm},
+        {"expected_rms_mm", p.expected_rms_mm},
+        {"centroid_S", vec_json(p.centroid_from)},
+        {"centroid_M", vec_json(r.T_M_S * p.centroid_from)},
+        {"covariance", covariance},
+        {"covariance_parameters",
+         "[wx, wy, wz] rad: rotation vector in M axes, R = exp([w]x) R_fit; [cx, cy, cz] mm: error of "
+         "T_M_S * centroid_S in M"}}},
+      {"plate_pose", r.T_M_P ? json{{"T_M_P", matrix_json(r.T_M_P->matrix())}} : json(nullptr)},
+      {"fiducial", fiducial},
+      {"order_verified", r.order_verified},
+      {"notes", r.notes},
+  };
+}
+
+}  // namespace cmm::planner

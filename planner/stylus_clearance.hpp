@@ -1,0 +1,41 @@
+// Whether one touch's motions are safe: inside the travel box, above the table, and with the ball,
+// shaft and head clear of the reference mesh from the clearance plane down to the contact.
+#pragma once
+
+#include <string>
+
+#include "geometry/ball_sweep.hpp"
+#include "planner/machine.hpp"
+#include "planner/touch.hpp"
+
+namespace cmm::planner {
+
+struct ClearanceCheck {
+  bool ok = true;
+  std::string reason;  // the first motion that failed, and what it met
+};
+
+class StylusClearance {
+ public:
+  // `obstacles` is the reference mesh in M; nothing of the stylus may go below `floor_z` (the
+  // table or base-plate top). `delta` bounds how far the real surface may be from the mesh.
+  StylusClearance(const geometry::BallSweeper& obstacles, double floor_z, const MachineDescription& machine,
+                  double ball_radius, double clearance_z, double delta);
+
+  // Descent from the clearance plane to the start, the search to the latest possible contact,
+  // and (by symmetry) the retract and rise. The ball must first meet the mesh near the target.
+  ClearanceCheck check(const Touch& touch) const;
+
+  double clearance_z() const { return clearance_z_; }
+
+ private:
+  ClearanceCheck check_stylus_at(const Vec3& ball_centre, const char* where) const;
+
+  const geometry::BallSweeper& obstacles_;
+  double floor_z_;
+  const MachineDescription& machine_;
+  StylusTip tip_;
+  double radius_, clearance_z_, delta_;
+};
+
+}  // namespace cmm::planner
