@@ -43,7 +43,7 @@ std::vector<int> Extractor::bores(SideRegionFinder& finder, std::vector<Rim>& ri
     const int key = *std::min_element(wall.begin(), wall.end());
     const Vec3 axis = wall_axis(rim, wall);
     rim.axis = axis.dot(rim.axis) >= 0 ? axis : Vec3(-axis);
-    rim.draft = wall_draft(rim, wall);
+    measure_wall_draft(rim, wall);
     by_wall[key].push_back(&rim);
     wall_faces.try_emplace(key, wall);
   }
@@ -104,7 +104,7 @@ Vec3 Extractor::wall_axis(const Rim& rim, const std::vector<int>& wall) const {
 
 // The wall's mean tilt along the axis over the whole bore: the folds along its two rims lean
 // opposite ways and cancel. Taken as zero (a cylinder) unless 3 standard errors away from it.
-double Extractor::wall_draft(const Rim& rim, const std::vector<int>& wall) const {
+void Extractor::measure_wall_draft(Rim& rim, const std::vector<int>& wall) const {
   double w_sum = 0, w2_sum = 0, sum = 0, squares = 0;
   for (int f : wall) {
     const Vec3 n = faces_.normals.row(f).transpose();
@@ -115,10 +115,10 @@ double Extractor::wall_draft(const Rim& rim, const std::vector<int>& wall) const
     const double w = faces_.areas[f], draft = n.dot(rim.axis) / radial;
     w_sum += w, w2_sum += w * w, sum += w * draft, squares += w * draft * draft;
   }
-  if (w_sum <= 0) return 0;
+  if (w_sum <= 0) return;
   const double mean = sum / w_sum;
-  const double standard_error = std::sqrt(std::max(0.0, squares / w_sum - mean * mean) * w2_sum) / w_sum;
-  return std::abs(mean) > 3 * standard_error ? mean : 0.0;
+  rim.draft_error = std::sqrt(std::max(0.0, squares / w_sum - mean * mean) * w2_sum) / w_sum;
+  rim.draft = std::abs(mean) > 3 * rim.draft_error ? mean : 0.0;
 }
 
 // A bore wall's normal at a rim point is known far better from the circle fitted to the whole rim
@@ -134,7 +134,9 @@ void Extractor::wall_normals_from_bore(const Rim& rim, std::vector<CurveSample>&
   for (CurveSample& s : samples) {
     SideNormal& wall = rim.wall_is_left ? s.left : s.right;
     const Vec3 fitted = (radial(s.at.position) + draft * rim.axis).normalized();
-    wall.uncertainty_rad = std::max(rim.circle.rms_mm / rim.circle.radius, wall.uncertainty_rad / 3);
+    // In the cross-section the wall normal errs by the draft's error; the rim circle's scatter
+    // bounds how far its fitted axis may tilt.
+    wall.uncertainty_rad = std::hypot(rim.circle.rms_mm / rim.circle.radius, rim.draft_error);
     wall.normal = fitted;
   }
 }

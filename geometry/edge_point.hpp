@@ -25,6 +25,7 @@ struct EdgePoint {
   Vec3 tangent = Vec3::UnitX();  // normalize(n_up × n_down); along the boundary where there is no n_down
   bool normals_inferred = false;  // n_down is not measured but inferred (hole rim whose wall the scan lost)
   std::optional<double> interior_angle_rad;  // material angle between the two sides
+  // Standard error of each normal's turn about the edge: the one component that moves a window.
   double n_up_uncertainty_rad = 0, n_down_uncertainty_rad = 0;
   double n_up_spread_rad = 0, n_down_spread_rad = 0;
   bool probeable = true;

@@ -31,6 +31,7 @@ struct Rim {
   int wall_face;
   Vec3 axis;         // out of the material at this rim
   double draft = 0;  // tan of the wall's tilt toward the axis direction, over the whole wall
+  double draft_error = 0;  // its standard error (0 is kept when the draft is within 3 of them)
 };
 
 // Small residuals alone are not enough: nearly collinear points fit a huge circle well. A rim goes
@@ -53,7 +54,8 @@ class Extractor {
   std::vector<CurveSample> sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points);
   int smoothing_window(std::size_t vertices, bool closed) const;
   bool two_distinct_sides(const std::vector<CurveSample>& samples) const;
-  SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s);
+  SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn);
+  Vec3 edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s) const;
   void emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole);
   void emit_loop_points(SideRegionFinder& finder, int loop_index);
   double distinct_sides_rad() const { return 0.5 * options_.features.angle_deg * std::numbers::pi / 180; }
@@ -61,7 +63,7 @@ class Extractor {
   std::optional<Rim> bore_rim(int curve, const std::vector<Vec3>& points, const std::vector<CurveSample>& samples);
   std::vector<int> bores(SideRegionFinder& finder, std::vector<Rim>& rims);
   Vec3 wall_axis(const Rim& rim, const std::vector<int>& wall) const;
-  double wall_draft(const Rim& rim, const std::vector<int>& wall) const;
+  void measure_wall_draft(Rim& rim, const std::vector<int>& wall) const;
   void wall_normals_from_bore(const Rim& rim, std::vector<CurveSample>& samples);
 
   static constexpr std::size_t min_region_faces = 6;

@@ -72,8 +72,9 @@ std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const
       (mesh_.faces(h / 3, h % 3) == from ? sample.left_face : sample.right_face) = h / 3;
     }
     if (sample.left_face < 0 || sample.right_face < 0) continue;  // inconsistent orientation here
-    sample.left = side(finder, sample.left_face, s);
-    sample.right = side(finder, sample.right_face, s);
+    const Vec3 turn = edge_turn(points, curve.closed, s);
+    sample.left = side(finder, sample.left_face, s, turn);
+    sample.right = side(finder, sample.right_face, s, turn);
     result.push_back(sample);
   }
   return result;
@@ -97,9 +98,17 @@ bool Extractor::two_distinct_sides(const std::vector<CurveSample>& samples) cons
   return turn[turn.size() / 2] >= distinct_sides_rad();
 }
 
+// The turn side_normal takes back out of a side's facets. Around a small rim the side region spans
+// a wide arc, where a few degrees' error in the estimated axis would turn the facets of a flat top
+// by more than the turn's own second-order effect: there the linear fit alone is better.
+Vec3 Extractor::edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s) const {
+  const Vec3 turn = polyline_turn(points, closed, s, 2 * along_);
+  return turn.norm() * along_ <= 0.5 ? turn : Vec3::Zero();
+}
+
 // The side normal grown from a seed face; a seed that is a fold of noise (its region stays tiny)
 // hands over to the neighbour whose region is largest.
-SideNormal Extractor::side(SideRegionFinder& finder, int seed, const PolylineSample& s) {
+SideNormal Extractor::side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn) {
   std::vector<int> region = finder.region(seed, s.position, s.direction, radius_, along_);
   if (region.size() < min_region_faces) {
     for (int k = 0; k < 3; ++k) {
@@ -110,7 +119,7 @@ SideNormal Extractor::side(SideRegionFinder& finder, int seed, const PolylineSam
       if (other.size() > region.size()) region = other;
     }
   }
-  return side_normal(mesh_, faces_, region, s.position, s.direction);
+  return side_normal(mesh_, faces_, region, s.position, s.direction, turn);
 }
 
 void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole) {
@@ -167,7 +176,8 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
   }
   for (const PolylineSample& s : sample_polyline(points, true, options_.spacing)) {
     const int face = loop.half_edges[s.segment] / 3;
-    const SideNormal side = side_normal(mesh_, faces_, finder.region(face, s.position, s.direction, radius_, along_), s.position, s.direction);
+    const SideNormal side = side_normal(mesh_, faces_, finder.region(face, s.position, s.direction, radius_, along_),
+                                        s.position, s.direction, edge_turn(points, true, s));
     EdgePoint p;
     p.id = static_cast<int>(model_.points.size());
     p.position = s.position;

@@ -18,9 +18,9 @@ struct FeatureModelOptions {
   // Radius of the neighbourhood each side normal is estimated over, in mean edge lengths: wide
   // enough to average scanner noise away, small enough to stay on the side's own face.
   double neighbourhood_edges = 5.0;
-  double noisy_neighbourhood_edges = 12.0;
+  double noisy_neighbourhood_edges = 18.0;
   // ...but no farther than this along the edge, where a rim's turning normals would foreshorten.
-  double neighbourhood_along_edges = 5.0;
+  double neighbourhood_along_edges = 7.0;
   // ...and within this turn of the normal where it starts, so it cannot wrap around a small bore.
   double neighbourhood_max_turn_deg = 30.0;
   // A loop is a circle when its RMS radial residual is below this fraction of its radius.

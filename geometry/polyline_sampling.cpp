@@ -58,4 +58,49 @@ std::vector<PolylineSample> sample_polyline(const std::vector<Vec3>& points, boo
   return samples;
 }
 
+namespace {
+
+// The turn between the chords to the points `half_length` back and ahead of the sample.
+Vec3 chord_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& sample, double half_length) {
+  const int n = static_cast<int>(points.size());
+  const int segments = closed ? n : n - 1;
+  if (segments < 1) return Vec3::Zero();
+  // Walks from the sample `half_length` along the polyline (less at an open end), one way: where
+  // it ends and how far along the polyline it got.
+  auto walk = [&](int step) {
+    Vec3 at = sample.position;
+    double left = half_length;
+    int vertex = step > 0 ? (sample.segment + 1) % n : sample.segment;
+    for (int visited = 0; visited <= segments && left > 0; ++visited) {
+      const double gap = (points[vertex] - at).norm();
+      if (gap >= left) return std::pair{Vec3(at + (points[vertex] - at) * (left / gap)), half_length};
+      left -= gap, at = points[vertex];
+      if (!closed && (vertex == 0 || vertex == n - 1)) break;
+      vertex = ((vertex + step) % n + n) % n;
+    }
+    return std::pair{at, half_length - left};
+  };
+  const auto [behind, back_length] = walk(-1);
+  const auto [beyond, ahead_length] = walk(+1);
+  const Vec3 back = sample.position - behind, ahead = beyond - sample.position;
+  if (back.norm() < 1e-9 || ahead.norm() < 1e-9) return Vec3::Zero();
+  // The chords of a circle run along the tangents at their arcs' middles, half the two arcs apart.
+  const Vec3 cross = back.normalized().cross(ahead.normalized());
+  if (cross.norm() < 1e-12) return Vec3::Zero();
+  const double angle = std::atan2(cross.norm(), back.normalized().dot(ahead.normalized()));
+  return cross.normalized() * (angle / ((back_length + ahead_length) / 2));
+}
+
+}  // namespace
+
+Vec3 polyline_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& sample, double half_length) {
+  // A circle turns at one rate over every span; a corner within reach turns the full and the half
+  // span by about the same angle over lengths 2:1 (or the half span not at all), and then the edge
+  // is taken as straight. 15 % leaves room for a noisy scan's rim, whose rates differ by up to ~10 %.
+  const Vec3 full = chord_turn(points, closed, sample, half_length);
+  const Vec3 half = chord_turn(points, closed, sample, half_length / 2);
+  if ((full - half).norm() > 0.15 * std::max(full.norm(), half.norm()) + 1e-3 / half_length) return Vec3::Zero();
+  return full;
+}
+
 }  // namespace cmm::geometry

@@ -22,4 +22,10 @@ std::vector<Vec3> smooth_polyline(const std::vector<Vec3>& points, bool closed, 
 // and every point of the curve is within spacing/2 of one. A closed polyline wraps around.
 std::vector<PolylineSample> sample_polyline(const std::vector<Vec3>& points, bool closed, double spacing);
 
+// How the polyline turns at a sample: axis × rate (rad per unit length), from the chords to the
+// points `half_length` back and ahead along it (fewer at an open end). Zero on a straight run, and
+// where the rate over half the span differs by over 15 % (a corner, not a circle, is within reach).
+// A side normal at s along a rim is this turn applied to the normal at the sample, to second order.
+Vec3 polyline_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& sample, double half_length);
+
 }  // namespace cmm::geometry

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <numbers>
+#include <tuple>
 
 #include "edge_truth.hpp"
 #include "geometry/analytic_parts.hpp"
@@ -61,6 +63,8 @@ TEST_P(FeatureModelOnParts, MatchesTruth) {
   // Every sharp-edge and rim point lies on a true edge, with the right flag and side normals.
   double worst_distance = 0, worst_normal = 0, normal_squares = 0;
   int normal_count = 0, over_tolerance = 0, unprobeable = 0;
+  double standardized_squares = 0;  // (turn about the edge / its stated standard error)², noisy meshes
+  int standardized_count = 0;
   int wrong_convexity = 0, off_edge = 0;
   std::map<int, std::pair<int, int>> per_curve;  // curve → (points, points off every true edge)
   std::map<int, Vec3> curve_at;
@@ -89,6 +93,15 @@ TEST_P(FeatureModelOnParts, MatchesTruth) {
                     << p.n_down_spread_rad * 57.3 << " deg, uncertainty " << p.n_up_uncertainty_rad * 57.3 << "/"
                     << p.n_down_uncertainty_rad * 57.3;
     worst_normal = std::max(worst_normal, normal_error);
+    if (model.features.noisy && !p.normals_inferred && p.hole < 0) {
+      // The stated error is of the turn about the edge: compare that component of the real one.
+      const Vec3 tangent = nearest.at.n_up.cross(nearest.at.n_down).normalized();
+      for (const auto& [estimate, truth, sigma] : {std::tuple{p.n_up, nearest.at.n_up, p.n_up_uncertainty_rad},
+                                                   std::tuple{*p.n_down, nearest.at.n_down, p.n_down_uncertainty_rad}}) {
+        const double turn = std::asin(std::clamp(truth.cross(estimate).dot(tangent), -1.0, 1.0));
+        standardized_squares += (turn / sigma) * (turn / sigma), ++standardized_count;
+      }
+    }
     normal_squares += normal_error * normal_error, ++normal_count, over_tolerance += normal_error > v.normal_tolerance_deg;
   }
   // Points off every true edge are tolerated only as short false curves.
@@ -108,6 +121,14 @@ TEST_P(FeatureModelOnParts, MatchesTruth) {
   EXPECT_LE(unprobeable, static_cast<int>(model.points.size()) / 20) << "points whose side normals could not be estimated";
   EXPECT_EQ(wrong_convexity, 0);
   EXPECT_LE(worst_normal, v.normal_tolerance_deg);
+  // The stated uncertainty is what the windows' margins are cut from: on the noisy meshes it must
+  // match the real errors (RMS of error/σ near 1), neither hiding them nor inflating the margins.
+  if (standardized_count > 0) {
+    const double calibration = std::sqrt(standardized_squares / standardized_count);
+    std::printf("    side normals: RMS of turn about the edge / its stated standard error %.2f over %d\n", calibration, standardized_count);
+    EXPECT_GT(calibration, 0.6);
+    EXPECT_LT(calibration, 1.5);
+  }
 
   // Holes: each true hole found once, radius within tolerance; nothing else reported as a hole.
   ASSERT_EQ(model.holes.size(), part.holes.size());
