@@ -90,12 +90,11 @@ WindowResult probe_window(const geometry::EdgePoint& point, double radius, doubl
   w.exact_half_angle_rad = feasible_half_angle(alpha, radius, delta);
   // Each edge of the fan is set by one side's normal alone (the ball's entry angle against that
   // face), so each edge gives up its own side's error bound and the window turns away from the
-  // less certain side. Only a normal's turn about the tangent moves the fan; the standard error is
-  // of the whole angle, of which that is one of two components: σ/√2.
+  // less certain side. Only a normal's turn about the tangent moves the fan, and that is the error
+  // the edge point's uncertainty states.
   const double bias = options.normal_bias_deg * deg;
-  const double in_plane = options.normal_sigmas / std::sqrt(2.0);
-  w.margin_up_rad = in_plane * point.n_up_uncertainty_rad + bias;
-  w.margin_down_rad = in_plane * point.n_down_uncertainty_rad + bias;
+  w.margin_up_rad = options.normal_sigmas * point.n_up_uncertainty_rad + bias;
+  w.margin_down_rad = options.normal_sigmas * point.n_down_uncertainty_rad + bias;
   w.margin_rad = (w.margin_up_rad + w.margin_down_rad) / 2;
   w.half_angle_rad = w.exact_half_angle_rad - w.margin_rad;
   w.axis = direction_in_window(w, (w.margin_down_rad - w.margin_up_rad) / 2);

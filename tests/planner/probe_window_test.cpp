@@ -168,12 +168,12 @@ TEST(ProbeWindow, WindowOfARightAngleEdge) {
   EXPECT_TRUE(w.window.bisector.isApprox(-Vec3(1, 0, 1).normalized(), 1e-12));
   EXPECT_TRUE(w.window.plane_normal.isApprox(Vec3::UnitY(), 1e-12));
   EXPECT_NEAR(w.window.exact_half_angle_rad, std::acos(0.2) - std::numbers::pi / 4, 1e-12);
-  // Each fan edge gives up its own side's in-plane bound, 3σ/√2; the window turns toward the
+  // Each fan edge gives up its own side's bound, 3σ; the window turns toward the
   // better-known side (down, here) by half the difference.
-  EXPECT_NEAR(w.window.margin_up_rad, 1.5 * deg / std::sqrt(2.0), 1e-12);
-  EXPECT_NEAR(w.window.margin_down_rad, 0.6 * deg / std::sqrt(2.0), 1e-12);
-  EXPECT_NEAR(w.window.half_angle_rad, w.window.exact_half_angle_rad - 1.05 * deg / std::sqrt(2.0), 1e-12);
-  EXPECT_NEAR(std::acos(w.window.axis.dot(w.window.bisector)), 0.45 * deg / std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(w.window.margin_up_rad, 1.5 * deg, 1e-12);
+  EXPECT_NEAR(w.window.margin_down_rad, 0.6 * deg, 1e-12);
+  EXPECT_NEAR(w.window.half_angle_rad, w.window.exact_half_angle_rad - 1.05 * deg, 1e-12);
+  EXPECT_NEAR(std::acos(w.window.axis.dot(w.window.bisector)), 0.45 * deg, 1e-9);
   // The usable fan's edges: the up edge is φ − margin_up from the bisector, the down edge φ − margin_down.
   const Vec3 up_edge = direction_in_window(w.window, w.window.half_angle_rad);
   const Vec3 down_edge = direction_in_window(w.window, -w.window.half_angle_rad);
@@ -202,9 +202,9 @@ TEST(ProbeWindow, NoWindowSaysWhy) {
   const WindowResult w = probe_window(flat, 1.0, 0.2);
   EXPECT_FALSE(w.usable);
   EXPECT_NE(w.reason.find("no window"), std::string::npos) << w.reason;
-  // Wide enough φ (33.5°) but normals so uncertain that the margins (2.5·18°/√2 + 0.1° = 31.9° each side)
+  // Wide enough φ (33.5°) but normals so uncertain that the margins (3.5·9° + 0.1° = 31.6° each side)
   // leaves less than the 5° minimum.
-  const WindowResult narrow = probe_window(right_angle_edge(18 * deg, 18 * deg), 1.0, 0.2);
+  const WindowResult narrow = probe_window(right_angle_edge(9 * deg, 9 * deg), 1.0, 0.2);
   EXPECT_FALSE(narrow.usable);
   EXPECT_NE(narrow.reason.find("too narrow"), std::string::npos) << narrow.reason;
 }
