@@ -1,12 +1,27 @@
 // See json_fields.hpp.
 #include "planner/json_fields.hpp"
 
+#include <cmath>
+
 #include "geometry/file_error.hpp"
 
 namespace cmm::planner {
 
 void fail_field(const std::string& source, const std::string& field, const std::string& message) {
   throw geometry::FileError::whole(source, field + ": " + message);
+}
+
+double number(const nlohmann::json& j, const std::string& source, const std::string& field) {
+  if (!j.is_number()) fail_field(source, field, "expected a number, got " + j.dump());
+  const double value = j.get<double>();
+  if (!std::isfinite(value)) fail_field(source, field, "not a finite number");
+  return value;
+}
+
+double positive(const nlohmann::json& j, const std::string& source, const std::string& field) {
+  const double value = number(j, source, field);
+  if (!(value > 0)) fail_field(source, field, "must be positive, got " + j.dump());
+  return value;
 }
 
 void only_known_keys(const nlohmann::json& j, const std::string& source, const std::string& field,

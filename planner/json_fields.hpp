@@ -11,6 +11,10 @@ namespace cmm::planner {
 
 [[noreturn]] void fail_field(const std::string& source, const std::string& field, const std::string& message);
 
+// A finite number, and one above zero.
+double number(const nlohmann::json& j, const std::string& source, const std::string& field);
+double positive(const nlohmann::json& j, const std::string& source, const std::string& field);
+
 // Refuses any key of object `j` (at `field`, "" for the top level) not in `known`: a typo such as
 // "thicknes_mm" would otherwise silently keep a default.
 void only_known_keys(const nlohmann::json& j, const std::string& source, const std::string& field,

@@ -25,18 +25,6 @@ const nlohmann::json& member(const nlohmann::json& j, const char* key, const std
   return j.at(key);
 }
 
-double number(const nlohmann::json& j, const std::string& source, const std::string& field) {
-  if (!j.is_number()) fail(source, field, "expected a number, got " + j.dump());
-  const double value = j.get<double>();
-  if (!std::isfinite(value)) fail(source, field, "not finite");
-  return value;
-}
-
-double positive(const nlohmann::json& j, const std::string& source, const std::string& field) {
-  const double value = number(j, source, field);
-  if (value <= 0) fail(source, field, "must be positive, got " + j.dump());
-  return value;
-}
 
 Vec3 vector(const nlohmann::json& j, const std::string& source, const std::string& field) {
   if (!j.is_array() || j.size() != 3) fail(source, field, "expected [x, y, z], got " + j.dump());

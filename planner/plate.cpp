@@ -25,18 +25,6 @@ std::string mm(double value) { return fixed(value, 2); }
   fail_field(source, field, message);
 }
 
-double number(const json& j, const std::string& source, const std::string& field) {
-  if (!j.is_number()) fail(source, field, "expected a number");
-  const double value = j.get<double>();
-  if (!std::isfinite(value)) fail(source, field, "not a finite number");
-  return value;
-}
-
-double positive(const json& j, const std::string& source, const std::string& field) {
-  const double value = number(j, source, field);
-  if (!(value > 0)) fail(source, field, "must be positive, got " + mm(value));
-  return value;
-}
 
 // [x, y] (z = 0) or [x, y, z].
 Vec3 point(const json& j, const std::string& source, const std::string& field, bool allow_2d) {

@@ -36,18 +36,6 @@ std::string id_list(const std::vector<int>& ids) {
   fail_field(source, field, message);
 }
 
-double number(const json& j, const std::string& source, const std::string& field) {
-  if (!j.is_number()) fail(source, field, "expected a number");
-  const double value = j.get<double>();
-  if (!std::isfinite(value)) fail(source, field, "not a finite number");
-  return value;
-}
-
-double positive(const json& j, const std::string& source, const std::string& field) {
-  const double value = number(j, source, field);
-  if (!(value > 0)) fail(source, field, "must be positive, got " + fixed(value, 4));
-  return value;
-}
 
 Vec3 vec3(const json& j, const std::string& source, const std::string& field) {
   if (!j.is_array() || j.size() != 3) fail(source, field, "expected [x, y, z]");

@@ -12,21 +12,15 @@
 
 #include "planner/tour_order.hpp"
 #include "planner/travel_bound.hpp"
+#include "travel_points.hpp"
 
 namespace {
 
 using namespace cmm::planner;
-using Points = std::vector<Eigen::Vector2d>;
+using cmm::planner::testing::Points;
+using cmm::planner::testing::random_points;
 
-const TravelCost cost{100, 500};
-
-Points random_points(int n, unsigned seed, double size = 300) {
-  std::mt19937 random(seed);
-  std::uniform_real_distribution<double> coordinate(0, size);
-  Points points(n);
-  for (auto& p : points) p = {coordinate(random), coordinate(random)};
-  return points;
-}
+const TravelCost& cost = cmm::planner::testing::travel_cost;
 
 // Edge points along a few arcs, each touched twice a few mm apart: what the planner produces.
 Points paired_arc_points(int pairs, unsigned seed) {
