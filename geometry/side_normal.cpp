@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
+#include <utility>
 
 namespace cmm::geometry {
 
@@ -75,6 +75,7 @@ struct Sample {
   Terms x;
   Vec3 normal;
   int face;
+  Eigen::Quaterniond turn = Eigen::Quaterniond::Identity();  // applied to the facet's own normal
 };
 
 struct Fit {
@@ -128,12 +129,6 @@ Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used) {
   return result;
 }
 
-Eigen::Matrix3d cross_matrix(const Vec3& e) {
-  Eigen::Matrix3d m;
-  m << 0, -e.z(), e.y(), e.z(), 0, -e.x(), -e.y(), e.x(), 0;
-  return m;
-}
-
 // Standard error of the fitted normal's turn about the edge when each vertex carries independent noise.
 // Facet normals sharing a vertex are not independent: a raised vertex tilts its facets opposite
 // ways, and over a patch these cancel (a patch's mean normal depends on its rim alone). Treating
@@ -142,8 +137,12 @@ Eigen::Matrix3d cross_matrix(const Vec3& e) {
 // carried through the fit's linear weights to the normal by the chain rule, vertex by vertex.
 double vertex_noise_uncertainty(const TriangleMesh& mesh, const std::vector<Sample>& samples,
                                 const std::vector<char>& used, const Fit& fit, const Vec3& tangent) {
+  if (fit.normal.squaredNorm() == 0) return 0;
+  // Only the normal's turn about the edge moves a probe window: its error along tangent × n.
+  const Vec3 turn_direction = tangent.cross(fit.normal.normalized()).normalized();
   double weighted_residual = 0, weighted_gain = 0, w_sum = 0, w2_sum = 0;
-  std::unordered_map<int, Eigen::Matrix3d> to_normal;  // per vertex: ∂(fitted normal)/∂(vertex)
+  std::vector<std::pair<int, Vec3>> to_turn;  // per vertex and facet: ∂(that turn)/∂(vertex), summed below
+  to_turn.reserve(3 * samples.size());
   for (std::size_t i = 0; i < samples.size(); ++i) {
     if (!used[i]) continue;
     const Sample& a = samples[i];
@@ -151,28 +150,32 @@ double vertex_noise_uncertainty(const TriangleMesh& mesh, const std::vector<Samp
                             vertex(mesh, mesh.faces(a.face, 2))};
     const double double_area = (corner[1] - corner[0]).cross(corner[2] - corner[0]).norm();
     if (!(double_area > 0)) continue;
-    const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - a.normal * a.normal.transpose();
-    const double c = a.weight * fit.intercept_weights.dot(a.x);
+    // The facet's normal enters the fit turned by a.turn, and its unit normal drops N's own direction:
+    // d·(a.turn (I − nnᵀ) δN / |N|), with δN = [v_{k+2} − v_{k+1}]× δv_k for N = (v1 − v0) × (v2 − v0).
+    const Vec3 u = a.turn.conjugate() * Vec3(turn_direction - turn_direction.dot(a.normal) * a.normal);
+    const double c = a.weight * fit.intercept_weights.dot(a.x) / double_area;
     double gain = 0;
     for (int k = 0; k < 3; ++k) {
-      // ∂N/∂v_k = [v_{k+2} − v_{k+1}]×, N = (v1 − v0) × (v2 − v0); the unit normal drops N's own direction.
       const Vec3 opposite = corner[(k + 2) % 3] - corner[(k + 1) % 3];
       gain += opposite.squaredNorm();
-      auto [it, added] = to_normal.try_emplace(mesh.faces(a.face, k), Eigen::Matrix3d::Zero());
-      it->second += (c / double_area) * across * cross_matrix(opposite);
+      to_turn.emplace_back(mesh.faces(a.face, k), c * u.cross(opposite));
     }
     weighted_residual += a.weight * (a.normal - fit.coefficients.transpose() * a.x).squaredNorm();
     weighted_gain += a.weight * gain / (double_area * double_area);
     w_sum += a.weight, w2_sum += a.weight * a.weight;
   }
-  if (!(weighted_gain > 0) || fit.normal.squaredNorm() == 0) return 0;
+  if (!(weighted_gain > 0)) return 0;
   const double effective_count = w_sum * w_sum / w2_sum;
   const double vertex_variance =
       weighted_residual / weighted_gain * effective_count / std::max(1.0, effective_count - fit.parameters);
-  // Only the normal's turn about the edge moves a probe window: the error along tangent × n.
-  const Vec3 turn_direction = tangent.cross(fit.normal.normalized()).normalized();
+  std::sort(to_turn.begin(), to_turn.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   double sum = 0;
-  for (const auto& [v, jacobian] : to_normal) sum += (turn_direction.transpose() * jacobian).squaredNorm();
+  for (std::size_t i = 0; i < to_turn.size();) {
+    Vec3 gradient = Vec3::Zero();
+    const int v = to_turn[i].first;
+    for (; i < to_turn.size() && to_turn[i].first == v; ++i) gradient += to_turn[i].second;
+    sum += gradient.squaredNorm();
+  }
   return std::sqrt(vertex_variance * sum) / fit.normal.norm();
 }
 
@@ -201,7 +204,8 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   for (int f : region) {
     const Vec3 offset = face_centroid(mesh, f) - point;
     const double s = offset.dot(tangent);
-    samples.push_back({faces.areas[f], terms_at(s, (offset - s * tangent).norm()), faces.normals.row(f).transpose(), f});
+    samples.push_back({faces.areas[f], terms_at(s, (offset - s * tangent).norm()), faces.normals.row(f).transpose(), f,
+                       Eigen::Quaterniond::Identity()});
   }
   std::vector<char> used;
   const Fit plain = robust_fit(samples, used);
@@ -223,7 +227,8 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
     const Vec3 from_axis = face_centroid(mesh, a.face) - point + to_point;
     const Vec3 across_axis = from_axis - from_axis.dot(axis) * axis;
     const double angle = std::atan2(axis.dot(to_point.cross(across_axis)), to_point.dot(across_axis));
-    a.normal = Eigen::AngleAxisd(-angle, axis) * a.normal;
+    a.turn = Eigen::AngleAxisd(-angle, axis);
+    a.normal = a.turn * a.normal;
   }
   std::vector<char> turned_used;
   const Fit fitted = robust_fit(turned, turned_used);
