@@ -351,12 +351,15 @@ std::optional<SweepHit> BallSweeper::first_hit(const Vec3& start, const Vec3& di
 }
 
 BallSweeper::Closest BallSweeper::closest_to_point(const Vec3& p, double within) const {
+  if (!p.allFinite() || std::isnan(within)) throw std::invalid_argument("closest_to_point: a coordinate or the bound is not a number");
   const auto walk = [this](double limit, auto&& bound, auto&& leaf) { tree_.nearest_first(limit, bound, leaf); };
   const NearestSlot nearest = closest_to_point_by(Slots{mesh_, tree_.order()}, walk, p, within);
   return {nearest.distance, nearest.point, nearest.slot >= 0 ? tree_.order()[nearest.slot] : -1};
 }
 
 BallSweeper::Closest BallSweeper::closest_to_segment(const Vec3& a, const Vec3& b, double within) const {
+  if (!a.allFinite() || !b.allFinite() || std::isnan(within))
+    throw std::invalid_argument("closest_to_segment: a coordinate or the bound is not a number");
   const Vec3 d = b - a;
   // A lower bound on the distance to anything within `size` of `centre`.
   auto ball_gap = [&](const Vec3& centre, double size) {

@@ -117,8 +117,10 @@ void Extractor::measure_wall_draft(Rim& rim, const std::vector<int>& wall) const
   }
   if (w_sum <= 0) return;
   const double mean = sum / w_sum;
-  rim.draft_error = std::sqrt(std::max(0.0, squares / w_sum - mean * mean) * w2_sum) / w_sum;
-  rim.draft = std::abs(mean) > 3 * rim.draft_error ? mean : 0.0;
+  const double standard_error = std::sqrt(std::max(0.0, squares / w_sum - mean * mean) * w2_sum) / w_sum;
+  rim.draft = std::abs(mean) > 3 * standard_error ? mean : 0.0;
+  // A draft taken as zero may still be up to |mean|: that stays in the error, with the noise's.
+  rim.draft_error = std::hypot(standard_error, mean - rim.draft);
 }
 
 // A bore wall's normal at a rim point is known far better from the circle fitted to the whole rim
@@ -134,8 +136,9 @@ void Extractor::wall_normals_from_bore(const Rim& rim, std::vector<CurveSample>&
   for (CurveSample& s : samples) {
     SideNormal& wall = rim.wall_is_left ? s.left : s.right;
     const Vec3 fitted = (radial(s.at.position) + draft * rim.axis).normalized();
-    // In the cross-section the wall normal errs by the draft's error; the rim circle's scatter
-    // bounds how far its fitted axis may tilt.
+    // Its turn about the rim's tangent is the draft's error plus the axis's tilt in that plane; the
+    // rim circle's scatter over its radius stands in for the latter (the axis comes from the whole
+    // wall, so it is no worse than that).
     wall.uncertainty_rad = std::hypot(rim.circle.rms_mm / rim.circle.radius, rim.draft_error);
     wall.normal = fitted;
   }

@@ -31,7 +31,7 @@ struct Rim {
   int wall_face;
   Vec3 axis;         // out of the material at this rim
   double draft = 0;  // tan of the wall's tilt toward the axis direction, over the whole wall
-  double draft_error = 0;  // its standard error (0 is kept when the draft is within 3 of them)
+  double draft_error = 0;  // its standard error, and the mean dropped when within 3 of them
 };
 
 // Small residuals alone are not enough: nearly collinear points fit a huge circle well. A rim goes

@@ -197,6 +197,8 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
       p.tangent = cross.norm() > 1e-9 ? Vec3(cross.normalized()) : s.direction;
       p.interior_angle_rad = std::numbers::pi - angle_between(side.normal, wall);
       (face_up ? p.n_up_uncertainty_rad : p.n_down_uncertainty_rad) = side.uncertainty_rad;
+      (face_up ? p.n_down_uncertainty_rad : p.n_up_uncertainty_rad) =
+          std::hypot(hole->roundness_mm / hole->radius, options_.inferred_wall_uncertainty_deg * std::numbers::pi / 180);
       (face_up ? p.n_up_spread_rad : p.n_down_spread_rad) = side.facet_spread_rad;
       hole->rim_point_ids.push_back(p.id);
     } else {

@@ -23,6 +23,9 @@ struct FeatureModelOptions {
   double neighbourhood_along_edges = 7.0;
   // ...and within this turn of the normal where it starts, so it cannot wrap around a small bore.
   double neighbourhood_max_turn_deg = 30.0;
+  // A wall the scan lost is taken square to the hole's axis; this is the standard error granted to
+  // that guess (a window's margin is 3.5 of them), for a draft or a tilt nobody measured.
+  double inferred_wall_uncertainty_deg = 0.5;
   // A loop is a circle when its RMS radial residual is below this fraction of its radius.
   double circle_tolerance = 0.05;
 };

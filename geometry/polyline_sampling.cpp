@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace cmm::geometry {
 
@@ -71,7 +72,7 @@ Vec3 chord_turn(const std::vector<Vec3>& points, bool closed, const PolylineSamp
     Vec3 at = sample.position;
     double left = half_length;
     int vertex = step > 0 ? (sample.segment + 1) % n : sample.segment;
-    for (int visited = 0; visited <= segments && left > 0; ++visited) {
+    for (int visited = 0; visited < (closed ? segments / 2 : segments) && left > 0; ++visited) {
       const double gap = (points[vertex] - at).norm();
       if (gap >= left) return std::pair{Vec3(at + (points[vertex] - at) * (left / gap)), half_length};
       left -= gap, at = points[vertex];
@@ -88,6 +89,9 @@ Vec3 chord_turn(const std::vector<Vec3>& points, bool closed, const PolylineSamp
   const Vec3 cross = back.normalized().cross(ahead.normalized());
   if (cross.norm() < 1e-12) return Vec3::Zero();
   const double angle = std::atan2(cross.norm(), back.normalized().dot(ahead.normalized()));
+  // Past ~120° the chords' angle no longer grows with the arc (atan2 tops out at 180°): too far
+  // round a small loop to tell its rate.
+  if (angle > 2 * std::numbers::pi / 3) return Vec3::Zero();
   return cross.normalized() * (angle / ((back_length + ahead_length) / 2));
 }
 

@@ -80,7 +80,6 @@ struct Sample {
 
 struct Fit {
   Vec3 normal;
-  double variance;  // of the normal at the point, were the facets' errors independent
   double spread_squared;
   Eigen::Matrix<double, terms, 3> coefficients;  // rows: the terms; columns: x, y, z
   // The normal at the point is Σ weight_f (uᵀx_f) n_f over the used samples.
@@ -100,7 +99,7 @@ Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used) {
     xtwn += a.weight * a.x * a.normal.transpose();
     w_sum += a.weight, w2_sum += a.weight * a.weight, mean += a.weight * a.normal;
   }
-  Fit result{Vec3::Zero(), 0, 0, Eigen::Matrix<double, terms, 3>::Zero(), Terms::Zero(), 1};
+  Fit result{Vec3::Zero(), 0, Eigen::Matrix<double, terms, 3>::Zero(), Terms::Zero(), 1};
   if (w_sum <= 0) return result;
   mean /= w_sum;
   const double effective_count = w_sum * w_sum / w2_sum;
@@ -121,8 +120,6 @@ Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used) {
   result.coefficients = curved ? linear : Eigen::Matrix<double, terms, 3>::Zero();
   if (!curved) result.coefficients.row(0) = mean.transpose();
   result.spread_squared = (curved ? rss_linear : rss_mean) / w_sum;
-  result.variance = result.spread_squared / effective_count;
-  if (curved) result.variance *= w_sum * solver.solve(Terms::Unit(0))(0);  // (XᵀWX)⁻¹₀₀ relative to 1/Σw
   result.intercept_weights = curved ? Terms(solver.solve(Terms::Unit(0))) : Terms(Terms::Unit(0) / w_sum);
   result.parameters = curved ? terms : 1;
   result.normal = result.coefficients.row(0).transpose();
@@ -211,10 +208,12 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   const Fit plain = robust_fit(samples, used);
   result.face_count = static_cast<int>(std::count(used.begin(), used.end(), 1));
   result.normal = plain.normal.normalized();
-  result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent);
   result.facet_spread_rad = std::sqrt(plain.spread_squared);
   const double curvature = turn.norm();
-  if (!(curvature > 1e-6) || plain.normal.squaredNorm() == 0) return result;
+  if (!(curvature > 1e-6) || plain.normal.squaredNorm() == 0) {
+    result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent);
+    return result;
+  }
 
   // A rim is taken as a circle of radius 1/|turn| about `axis`: both sides turn about it, exactly so
   // on a surface of revolution, so each facet is turned back by its angle about that axis and the
@@ -232,10 +231,15 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   }
   std::vector<char> turned_used;
   const Fit fitted = robust_fit(turned, turned_used);
-  if (fitted.normal.squaredNorm() == 0) return result;
+  if (fitted.normal.squaredNorm() == 0) {
+    result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent);
+    return result;
+  }
   const Vec3 across = fitted.normal.normalized();
   result.normal = (across - across.dot(tangent) * tangent + result.normal.dot(tangent) * tangent).normalized();
   result.uncertainty_rad = vertex_noise_uncertainty(mesh, turned, turned_used, fitted, tangent);
+  result.face_count = static_cast<int>(std::count(turned_used.begin(), turned_used.end(), 1));
+  result.facet_spread_rad = std::sqrt(fitted.spread_squared);  // about the field the turn left
   return result;
 }
 

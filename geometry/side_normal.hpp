@@ -50,9 +50,10 @@ class SideRegionFinder {
 // and across-edge coordinates and taken at the point itself: a one-sided average would be biased
 // toward the region's middle. On a flat side the plain mean is kept, as it is the less noisy.
 // `turn` (polyline_turn: axis × rate per unit length) is how the edge turns at the point: along a
-// rim both sides turn with it, and each facet's normal is turned back by its distance along the edge
-// before the fit. Without that, the fit's linear term follows the turn to first order only, and
-// the second order leans a rim's normals by ~0.2° on a 25 mm circle even on an exact mesh.
+// rim both sides turn with it, so each facet's normal is turned back by its centroid's angle about
+// the circle's axis and the field fitted again. Without that, the fit's linear term follows the turn
+// to first order only, and the second order leans a rim's normals by ~0.2° on a 25 mm circle even on
+// an exact mesh. The normal's component along the edge stays the plain fit's.
 SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
                        const Vec3& point, const Vec3& tangent, const Vec3& turn = Vec3::Zero());
 

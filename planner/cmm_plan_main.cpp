@@ -74,6 +74,9 @@ void choose_tip(planner::MachineDescription& machine, Options& o) {
                            " with its ball changed to that radius; qualify such a tip before running the plan");
   tip.id += "_r" + format_mm(r);
   tip.ball_radius_mm = r;
+  if (const std::string why = planner::tip_problem(tip); !why.empty())
+    throw std::invalid_argument("--probe-radius " + format_mm(r) + ": no tip has that radius, and tip " +
+                                machine.tip().id + " with its ball changed to it is unusable (" + why + ")");
   machine.tips.push_back(tip);
   machine.active_tip = tip.id;
 }
@@ -100,18 +103,26 @@ geometry::TriangleMesh read_mesh(const std::string& path, planner::PlanInputs& i
   return mesh;
 }
 
+// An output that could not be written: exit 1, not a bad input.
+struct WriteError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 // Written beside the target and renamed over it, so a failed write never leaves half a file.
 void write_atomically(const std::string& path, const std::string& text) {
   const std::string partial = path + ".partial";
+  errno = 0;
   std::ofstream out(partial);
   out << text;
   out.close();
+  const int write_errno = errno;
   std::error_code renamed;
   if (out) std::filesystem::rename(partial, path, renamed);
   if (!out || renamed) {
     std::error_code ignored;
     std::filesystem::remove(partial, ignored);
-    throw std::runtime_error("cannot write " + path + ": " + (renamed ? renamed.message() : std::strerror(errno)));
+    const std::string why = renamed ? renamed.message() : write_errno ? std::strerror(write_errno) : "the write failed";
+    throw WriteError("cannot write " + path + ": " + why);
   }
 }
 
@@ -203,11 +214,15 @@ int plan(Options o) {
   const planner::MeasurementPlan plan = planner::plan_measurement(model, mesh, T_M_S, machine, plan_options);
   times.done("plan");
 
+  // Both texts first, so that a program the DMIS export refuses leaves no plan behind either.
   const nlohmann::json registration_json = registration ? planner::to_json(*registration) : nlohmann::json(nullptr);
-  write_atomically(o.output, planner::plan_json(model, inputs, &plan, &machine, registration_json).dump(1) + "\n");
+  const std::string plan_text = planner::plan_json(model, inputs, &plan, &machine, registration_json).dump(1) + "\n";
+  std::ostringstream dmis;
   if (!o.dmis.empty())
-    planner::write_dmis_file(o.dmis, plan.program, machine, planner::dmis_features(plan.program, model.holes),
-                             {"cmm-plan", std::filesystem::path(o.model).stem().string()});
+    planner::write_dmis(dmis, plan.program, machine, planner::dmis_features(plan.program, model.holes),
+                        {"cmm-plan", std::filesystem::path(o.model).stem().string()});
+  write_atomically(o.output, plan_text);
+  if (!o.dmis.empty()) write_atomically(o.dmis, dmis.str());
   times.done("write");
   print_summary(o, times, model, inputs.read_report, plan, machine, registration);
   return 0;
@@ -256,8 +271,11 @@ int main(int argc, char** argv) {
   } catch (const std::invalid_argument& error) {  // an input the planner cannot use, named by the message
     std::cerr << "cmm-plan: " << error.what() << '\n';
     return 2;
-  } catch (const std::exception& error) {  // out of memory, a failed write and the like: say so, no core dump
-    std::cerr << "cmm-plan: " << o.model << ": " << error.what() << '\n';
+  } catch (const WriteError& error) {
+    std::cerr << "cmm-plan: " << error.what() << '\n';
+    return 1;
+  } catch (const std::exception& error) {  // out of memory and the like: say so, no core dump
+    std::cerr << "cmm-plan: while planning " << o.model << ": " << error.what() << '\n';
     return 1;
   }
 }

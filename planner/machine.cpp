@@ -34,6 +34,7 @@ Vec3 vector(const nlohmann::json& j, const std::string& source, const std::strin
 nlohmann::json array(const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
 
 StylusTip tip_from_json(const nlohmann::json& j, const std::string& source, const std::string& at) {
+  if (!j.is_object()) fail(source, at.substr(0, at.size() - 1), "expected an object");
   StylusTip tip;
   only_known_keys(j, source, at.substr(0, at.size() - 1),
                   {"id", "ball_radius_mm", "offset", "shaft_radius_mm", "shaft_length_mm", "direction", "head_radius_mm"});
@@ -50,12 +51,20 @@ StylusTip tip_from_json(const nlohmann::json& j, const std::string& source, cons
     tip.direction.normalize();
   }
   if (j.contains("head_radius_mm")) tip.head_radius_mm = positive(j["head_radius_mm"], source, at + "head_radius_mm");
-  if (tip.shaft_radius_mm > tip.ball_radius_mm)
-    fail(source, at + "shaft_radius_mm", "is wider than the ball: the shaft would touch first");
+  if (const std::string why = tip_problem(tip); !why.empty()) {
+    const std::size_t colon = why.find(':');  // "field: why"
+    fail(source, at + why.substr(0, colon), why.substr(colon + 2));
+  }
   return tip;
 }
 
 }  // namespace
+
+std::string tip_problem(const StylusTip& tip) {
+  if (tip.shaft_radius_mm > tip.ball_radius_mm) return "shaft_radius_mm: is wider than the ball: the shaft would touch first";
+  if (tip.shaft_length_mm <= tip.ball_radius_mm) return "shaft_length_mm: does not reach past the ball";
+  return {};
+}
 
 const StylusTip& MachineDescription::tip() const {
   for (const StylusTip& t : tips)
@@ -70,6 +79,8 @@ MachineDescription machine_from_json(const nlohmann::json& j, const std::string&
                   {"name", "description", "travel_box", "max_speed_mm_s", "max_accel_mm_s2", "probe_speed_mm_s",
                    "clearance_z", "tips", "active_tip", "reference_sphere"});
   const auto& box = member(j, "travel_box", source, "");
+  if (!box.is_object()) fail(source, "travel_box", "expected an object");
+  only_known_keys(box, source, "travel_box", {"min", "max"});
   m.travel_box.min = vector(member(box, "min", source, "travel_box."), source, "travel_box.min");
   m.travel_box.max = vector(member(box, "max", source, "travel_box."), source, "travel_box.max");
   if (!(m.travel_box.min.array() < m.travel_box.max.array()).all()) fail(source, "travel_box", "min must be below max on every axis");
@@ -98,6 +109,8 @@ MachineDescription machine_from_json(const nlohmann::json& j, const std::string&
   }
   if (j.contains("reference_sphere")) {
     const auto& sphere = j["reference_sphere"];
+    if (!sphere.is_object()) fail(source, "reference_sphere", "expected an object");
+    only_known_keys(sphere, source, "reference_sphere", {"centre", "radius_mm"});
     m.reference_sphere.centre = vector(member(sphere, "centre", source, "reference_sphere."), source, "reference_sphere.centre");
     m.reference_sphere.radius_mm =
         positive(member(sphere, "radius_mm", source, "reference_sphere."), source, "reference_sphere.radius_mm");

@@ -49,6 +49,10 @@ struct MachineDescription {
   const StylusTip& tip() const;  // the active one
 };
 
+// What makes a tip unusable, as "field: why" ("" when it is fine): a shaft wider than the ball, or
+// one that does not reach past it.
+std::string tip_problem(const StylusTip& tip);
+
 // Parses and checks a description; errors name the file (or "<json>") and the field.
 MachineDescription machine_from_json(const nlohmann::json& j, const std::string& source = "<json>");
 MachineDescription read_machine(const std::filesystem::path& file);

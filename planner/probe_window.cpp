@@ -78,6 +78,11 @@ WindowResult probe_window(const geometry::EdgePoint& point, double radius, doubl
     result.reason = "the two side normals are parallel: no edge to window";
     return result;
   }
+  if (!(point.n_up_uncertainty_rad >= 0) || !(point.n_down_uncertainty_rad >= 0) ||
+      !std::isfinite(point.n_up_uncertainty_rad + point.n_down_uncertainty_rad)) {
+    result.reason = "the side normals' uncertainty is not a finite, non-negative angle";
+    return result;
+  }
   if (!(delta < radius)) {
     result.reason = "delta " + fixed(delta, 3) + " mm is not below the ball radius " + fixed(radius, 3) + " mm";
     return result;
@@ -101,7 +106,7 @@ WindowResult probe_window(const geometry::EdgePoint& point, double radius, doubl
   if (w.exact_half_angle_rad <= 0) {
     result.reason = "no window: acos(delta/r) - alpha/2 = " + fixed(w.exact_half_angle_rad / deg) + " deg (alpha " +
                     fixed(alpha / deg) + " deg, r " + fixed(radius, 3) + " mm, delta " + fixed(delta, 3) + " mm)";
-  } else if (w.half_angle_rad < options.min_half_angle_deg * deg) {
+  } else if (!(w.half_angle_rad >= options.min_half_angle_deg * deg)) {
     result.reason = "window too narrow: phi " + fixed(w.exact_half_angle_rad / deg) + " deg less a normal margin of " +
                     fixed(w.margin_rad / deg) + " deg leaves " + fixed(w.half_angle_rad / deg) + " deg (minimum " +
                     fixed(options.min_half_angle_deg) + ")";

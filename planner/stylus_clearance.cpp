@@ -67,18 +67,23 @@ ClearanceCheck StylusClearance::check(const Touch& t) const {
   if (std::min(t.start.z(), end.z()) - radius_ < floor_z_)
     return refuse("the ball would go below the table top at z " + mm(floor_z_));
 
-  // Descent: the ball sweeps the column below the clearance plane; a shaft along its own motion
-  // stays inside that column, so only the wider head needs its own sweep.
+  // Descent: the ball sweeps the column below the clearance plane. A vertical stylus (head above
+  // the ball) stays inside that column, so only the wider head needs its own sweep; any other
+  // stylus is checked along the descent, spaced at the shaft radius as along the search.
   const double descent = clearance_z_ - t.start.z();
   if (descent < 0) return refuse("the approach start lies above the clearance plane");
   if (auto hit = obstacles_.first_hit(above, -Vec3::UnitZ(), descent, radius_))
     return refuse("the ball would meet the part at " + describe(hit->contact) + " descending to the approach start");
   const Vec3 up = -tip_.direction;
-  if (std::abs(up.z()) < 1 - 1e-9) {
-    if (auto check = check_stylus_at(t.start, "at the approach start"); !check.ok) return check;
-  } else if (auto hit = obstacles_.first_hit(above + up * tip_.shaft_length_mm, -Vec3::UnitZ(), descent,
-                                             tip_.head_radius_mm)) {
-    return refuse("the probe head would meet the part descending to the approach start");
+  if (up.z() > 1 - 1e-9) {
+    if (obstacles_.first_hit(above + up * tip_.shaft_length_mm, -Vec3::UnitZ(), descent, tip_.head_radius_mm))
+      return refuse("the probe head would meet the part descending to the approach start");
+  } else {
+    const int steps = std::max(1, static_cast<int>(std::ceil(descent / std::max(tip_.shaft_radius_mm, 0.05))));
+    for (int i = 0; i < steps; ++i)  // the start itself is the search's first position, below
+      if (auto check = check_stylus_at(above - (descent * i / steps) * Vec3::UnitZ(), "descending to the approach start");
+          !check.ok)
+        return check;
   }
 
   // Search: the ball must meet the mesh first near the target, not on something on its way.

@@ -188,6 +188,15 @@ TEST_F(CmmPlan, RegistrationTakesTheProgramIntoTheMachineFrame) {
   EXPECT_GT(checked, 600);
 }
 
+TEST_F(CmmPlan, RadiusTooSmallForTheActiveTipsShaftIsRefused) {
+  const CommandResult r =
+      plan(CMMD_SOURCE_DIR "/config/samples/case3_block.ply", path("plan.json"), "--probe-radius 0.3");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--probe-radius 0.3: no tip has that radius"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("wider than the ball"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("plan.json")));
+}
+
 TEST_F(CmmPlan, ReadmeWorkflowRegistersTheSamplePart) {
   // The command of README.md and scripts/demo, with the sample corners and their plate reference.
   const CommandResult r = plan(CMMD_SOURCE_DIR "/config/samples/case3_block.ply", path("plan.json"),

@@ -53,6 +53,11 @@ TEST(Machine, BadFieldsAreNamed) {
   EXPECT_NE(with("/tips/0/shaft_radius_mm", 2).find("tips[0].shaft_radius_mm: is wider than the ball"),
             std::string::npos);
   EXPECT_NE(with("/tips/0/direction", json::array({0, 0, 0})).find("tips[0].direction: is zero"), std::string::npos);
+  EXPECT_NE(with("/tips/0/shaft_length_mm", 0.5).find("tips[0].shaft_length_mm: does not reach past the ball"),
+            std::string::npos);
+  EXPECT_NE(with("/tips/0", json::array({1, 2})).find("tips[0]: expected an object"), std::string::npos);
+  EXPECT_NE(with("/travel_box/mx", 1).find("travel_box.mx: unknown field"), std::string::npos);
+  EXPECT_NE(with("/reference_sphere/radius", 1).find("reference_sphere.radius: unknown field"), std::string::npos);
   EXPECT_NE(with("/max_speed", 5).find("max_speed: unknown field"), std::string::npos);
   EXPECT_NE(with("/tips/0/ball_radius", 5).find("tips[0].ball_radius: unknown field"), std::string::npos);
   json missing = good;
