@@ -1,0 +1,16 @@
+// Lifecycle names for status reports and errors.
+#include "hal/machine_info.hpp"
+
+namespace cmm::hal {
+
+const char* to_string(Lifecycle state) {
+  switch (state) {
+    case Lifecycle::unconfigured: return "unconfigured";
+    case Lifecycle::configured: return "configured";
+    case Lifecycle::connected: return "connected";
+    case Lifecycle::enabled: return "enabled";
+  }
+  return "unknown";
+}
+
+}  // namespace cmm::hal

@@ -1,0 +1,86 @@
+// Qualification on the reference sphere: pole touch, ring touches, sphere fit, record.
+#include "hal/qualification.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <numbers>
+#include <stdexcept>
+
+#include "hal/sphere_fit.hpp"
+
+namespace cmm::hal {
+
+namespace {
+std::string utc_now() {
+  auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
+const TipInfo& find_tip(const MachineInfo& info, const std::string& id) {
+  for (const auto& tip : info.tips)
+    if (tip.id == id) return tip;
+  throw std::invalid_argument("qualify: no tip \"" + id + "\" on this machine");
+}
+}  // namespace
+
+TipQualification qualify(Cmm& cmm, const std::string& tip_id, const QualificationOptions& options) {
+  if (options.touches < 5) throw std::invalid_argument("qualify: needs at least 5 touches");
+  if (!(options.ring_latitude_deg > 0 && options.ring_latitude_deg < 80))
+    throw std::invalid_argument("qualify: ring_latitude_deg must be in (0, 80)");
+  if (!(options.search_mm > 0)) throw std::invalid_argument("qualify: search_mm must be > 0");
+
+  cmm.select_tip(tip_id);
+  MachineInfo info = cmm.info();
+  const TipInfo& tip = find_tip(info, tip_id);
+  const Vec3 centre = info.reference_sphere.centre;
+  const double reach = info.reference_sphere.radius_mm + tip.ball_radius_mm;  // nominal centre-sphere radius
+  const double speed = options.speed_mm_s > 0 ? options.speed_mm_s : info.probe_speed_mm_s;
+  // Starts on the ring must be reachable by a vertical descent beside the sphere, so the start
+  // radius grows until the ring's horizontal distance clears it by a millimetre.
+  const double latitude = options.ring_latitude_deg * std::numbers::pi / 180;
+  const double start_radius = std::max(reach + options.search_mm, (reach + 1) / std::cos(latitude));
+  const double safe_z = centre.z() + start_radius + options.search_mm;
+
+  std::vector<Vec3> outward{Vec3::UnitZ()};
+  const int ring = options.touches - 1;
+  for (int i = 0; i < ring; ++i) {
+    double azimuth = 2 * std::numbers::pi * i / ring;
+    outward.emplace_back(std::cos(latitude) * std::cos(azimuth), std::cos(latitude) * std::sin(azimuth),
+                         std::sin(latitude));
+  }
+
+  std::vector<Vec3> centres;
+  for (const Vec3& u : outward) {
+    Vec3 start = centre + start_radius * u;
+    Vec3 above(start.x(), start.y(), safe_z);
+    cmm.move({Vec3(cmm.status().position.x(), cmm.status().position.y(), safe_z), 0});
+    cmm.move({above, 0});
+    ProbeMove probe;
+    probe.start = start;
+    probe.direction = -u;
+    probe.max_travel_mm = start_radius - reach + options.search_mm;
+    probe.speed_mm_s = speed;
+    probe.retract_mm = start_radius - reach;
+    probe.fail_on_miss = true;
+    TouchResult touch = cmm.probe(probe);
+    centres.push_back(touch.centre);
+  }
+  cmm.move({Vec3(cmm.status().position.x(), cmm.status().position.y(), safe_z), 0});
+
+  SphereFit fit = fit_sphere(centres);
+  TipQualification q;
+  q.ball_radius_mm = fit.radius - info.reference_sphere.radius_mm;
+  q.offset = tip.offset + (centre - fit.centre);
+  q.residual_rms_mm = fit.residual_rms;
+  q.touches = static_cast<int>(centres.size());
+  q.time_utc = utc_now();
+  cmm.record_qualification(tip_id, q);
+  return q;
+}
+
+}  // namespace cmm::hal

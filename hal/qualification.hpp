@@ -1,0 +1,25 @@
+// Tip qualification: touch the reference sphere from the pole and a ring around it, fit a sphere to
+// the ball centres, and record the tip's effective radius and offset (hal::Cmm::record_qualification).
+#pragma once
+
+#include <string>
+
+#include "hal/cmm.hpp"
+
+namespace cmm::hal {
+
+struct QualificationOptions {
+  int touches = 9;              // ≥ 5: one from the pole, the rest spread around a ring
+  double ring_latitude_deg = 30;  // above the sphere's equator; keeps clear of its stem
+  double search_mm = 4;          // each search starts this far outside the nominal surface
+  double speed_mm_s = 0;         // 0: the machine's probe speed
+};
+
+// Selects `tip_id`, measures it and records the result, which it also returns. The moves between
+// touches go over the sphere's pole at a safe height. The effective radius is the fitted radius
+// less the sphere's; the offset is the current offset corrected by how far the fitted centre lies
+// from the sphere's known centre. Throws std::invalid_argument for bad options and hal::Fault for
+// what the machine reports (a miss means the sphere is not where the description says).
+TipQualification qualify(Cmm& cmm, const std::string& tip_id, const QualificationOptions& options = {});
+
+}  // namespace cmm::hal

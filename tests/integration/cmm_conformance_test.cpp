@@ -1,0 +1,321 @@
+// One conformance suite for every hal::Cmm path: the same machine, part, seed and moves must give
+// the same behaviour, the same faults and the same touches whichever transport carries them.
+#include <chrono>
+#include <cmath>
+#include <future>
+#include <map>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "hal/cmm.hpp"
+#include "hal/qualification.hpp"
+#include "sim/simulated_cmm.hpp"
+
+namespace cmm {
+namespace {
+
+using hal::Vec3;
+using Clock = std::chrono::steady_clock;
+
+// The default scene: the case-3 block (88 × 95 × 41 mm) with its corner at plate (50, 25), the
+// plate's corner at M (200, 300, 0), so the block spans M x 250–338, y 325–420, z 0–41.
+const Vec3 kBlockCorner(250, 325, 0);
+constexpr double kTop = 41, kSigma = 0.001, kRadius = 1.0;
+
+nlohmann::json base_config() {
+  return {{"part", {{"analytic", "case3_block"}, {"edge_length_mm", 2}}}, {"trigger_sigma_mm", kSigma}, {"seed", 42}};
+}
+
+// In-process: the simulator as a library.
+struct InProcessPath {
+  static std::string name() { return "in-process"; }
+  hal::Cmm& open(const nlohmann::json& config) {
+    cmm = std::make_unique<sim::SimulatedCmm>(CMMD_SOURCE_DIR);
+    cmm->configure(config);
+    cmm->connect();
+    cmm->enable();
+    return *cmm;
+  }
+  std::unique_ptr<sim::SimulatedCmm> cmm;
+};
+
+// Touches per path from SameSeedSameTouchesOnEveryPath, compared across paths at the end.
+std::map<std::string, std::vector<Vec3>>& touches_by_path() {
+  static std::map<std::string, std::vector<Vec3>> touches;
+  return touches;
+}
+
+template <class Path>
+class CmmConformance : public ::testing::Test {
+ public:
+  hal::Cmm& open(const nlohmann::json& overrides = nlohmann::json::object()) {
+    nlohmann::json config = base_config();
+    config.merge_patch(overrides);
+    truth_ = std::make_unique<sim::SimulatedMachine>(sim::sim_config_from_json(config, CMMD_SOURCE_DIR));
+    return path_.open(config);
+  }
+
+  // A vertical touch on the block's top at block coordinates (x, y), from the clearance plane.
+  static hal::ProbeMove top_touch(double x, double y) {
+    hal::ProbeMove p;
+    p.start = kBlockCorner + Vec3(x, y, kTop + kRadius + 5);
+    p.direction = -Vec3::UnitZ();
+    p.max_travel_mm = 10;
+    p.min_travel_mm = 2;
+    p.speed_mm_s = 5;
+    p.retract_mm = 2;
+    return p;
+  }
+  // Up to the clearance plane, across, then the search (which descends to its start, guarded).
+  static hal::TouchResult touch(hal::Cmm& cmm, const hal::ProbeMove& p) {
+    const Vec3 at = cmm.status().position;
+    cmm.move({Vec3(at.x(), at.y(), 60), 0});
+    cmm.move({Vec3(p.start.x(), p.start.y(), 60), 0});
+    return cmm.probe(p);
+  }
+  // Where the noise-free touch would be: the simulator's own truth, never seen by a driver.
+  Vec3 truth(const hal::ProbeMove& p) const {
+    auto c = truth_->true_contact(p);
+    EXPECT_TRUE(c.has_value());
+    return c.value_or(Vec3::Constant(NAN));
+  }
+
+  Path path_;
+  std::unique_ptr<sim::SimulatedMachine> truth_;
+};
+
+using Paths = ::testing::Types<InProcessPath>;
+class PathNames {
+ public:
+  template <class T>
+  static std::string GetName(int) { return T::name() == "in-process" ? "InProcess" : T::name(); }
+};
+TYPED_TEST_SUITE(CmmConformance, Paths, PathNames);
+
+TYPED_TEST(CmmConformance, HomesBeforeItMoves) {
+  hal::Cmm& cmm = this->open();
+  EXPECT_FALSE(cmm.status().homed);
+  EXPECT_THROW(cmm.move({Vec3(300, 400, 100), 0}), hal::NotHomed);
+  cmm.enable();
+  cmm.home();
+  hal::MachineStatus s = cmm.status();
+  EXPECT_TRUE(s.homed);
+  EXPECT_EQ(s.lifecycle, hal::Lifecycle::enabled);
+  EXPECT_LT((s.position - cmm.info().travel_box.max).norm(), 1e-6);
+}
+
+TYPED_TEST(CmmConformance, MovesAndRefusesTargetsOutOfTravel) {
+  hal::Cmm& cmm = this->open();
+  cmm.home();
+  cmm.move({Vec3(300, 400, 100), 50});
+  EXPECT_LT((cmm.status().position - Vec3(300, 400, 100)).norm(), 1e-6);
+  const double t = cmm.status().t_s;
+  EXPECT_THROW(cmm.move({Vec3(300, 400, 1000), 0}), hal::SoftLimit);
+  EXPECT_LT((cmm.status().position - Vec3(300, 400, 100)).norm(), 1e-6);  // refused before moving
+  EXPECT_EQ(cmm.status().t_s, t);
+  EXPECT_EQ(cmm.status().lifecycle, hal::Lifecycle::connected);  // a fault drops back to connected
+  EXPECT_THROW(cmm.move({Vec3(300, 400, 90), 0}), hal::StateError);
+  cmm.enable();
+  cmm.move({Vec3(300, 400, 90), 0});
+}
+
+TYPED_TEST(CmmConformance, TouchesTheTruePartWithinTheTriggerNoise) {
+  hal::Cmm& cmm = this->open();
+  cmm.home();
+  // Top face, away from the holes, and two side walls at mid height.
+  std::vector<hal::ProbeMove> moves;
+  for (auto [x, y] : std::vector<std::pair<double, double>>{{28, 28}, {60, 75}, {44, 10}, {80, 47.5}, {20, 50}})
+    moves.push_back(this->top_touch(x, y));
+  for (auto [start, dir] : std::vector<std::pair<Vec3, Vec3>>{{Vec3(-6, 47.5, 20), Vec3::UnitX()},
+                                                             {Vec3(44, 101, 30), -Vec3::UnitY()}}) {
+    hal::ProbeMove p = this->top_touch(0, 0);
+    p.start = kBlockCorner + start;
+    p.direction = dir;
+    moves.push_back(p);
+  }
+  for (std::size_t i = 0; i < moves.size(); ++i) {
+    hal::TouchResult r = this->touch(cmm, moves[i]);
+    ASSERT_TRUE(r.contact);
+    EXPECT_EQ(r.tip_id, "T1");
+    EXPECT_LE((r.centre - this->truth(moves[i])).norm(), 3 * kSigma) << "touch " << i;
+    // The analytic truth: the top at z = 41, the walls at block x = 0 and y = 95.
+    const Vec3 c = r.centre - kBlockCorner;
+    const double off = i < 5 ? c.z() - (kTop + kRadius) : i == 5 ? c.x() + kRadius : c.y() - (95 + kRadius);
+    EXPECT_LE(std::abs(off), 3 * kSigma) << "touch " << i;
+    EXPECT_NEAR(r.travel_mm, (r.centre - moves[i].start).norm(), 3 * kSigma);
+    // Retracted along the approach, clear of the part.
+    EXPECT_LT((cmm.status().position - (r.centre - moves[i].direction * moves[i].retract_mm)).norm(), 3 * kSigma + 1e-6);
+  }
+}
+
+TYPED_TEST(CmmConformance, AMissIsNoContactOrAnEmptyResult) {
+  hal::Cmm& cmm = this->open();
+  cmm.home();
+  hal::ProbeMove air = this->top_touch(-30, -15);  // over the plate, 47 mm above it
+  cmm.move({Vec3(air.start.x(), air.start.y(), 60), 0});
+  EXPECT_THROW(cmm.probe(air), hal::NoContact);
+  EXPECT_EQ(cmm.status().fault, hal::FaultKind::no_contact);
+  EXPECT_EQ(cmm.status().lifecycle, hal::Lifecycle::connected);
+  cmm.enable();
+  air.fail_on_miss = false;
+  hal::TouchResult r = cmm.probe(air);
+  EXPECT_FALSE(r.contact);
+  EXPECT_NEAR(r.travel_mm, air.max_travel_mm, 1e-6);
+}
+
+TYPED_TEST(CmmConformance, AnEarlyTriggerIsAFaultNotATouch) {
+  hal::Cmm& cmm = this->open();
+  cmm.home();
+  hal::ProbeMove close = this->top_touch(28, 28);
+  close.start.z() = kTop + kRadius + 1;  // the surface is 1 mm away, the search must cover 2 first
+  cmm.move({Vec3(close.start.x(), close.start.y(), 60), 0});
+  EXPECT_THROW(cmm.probe(close), hal::EarlyTrigger);
+  EXPECT_EQ(cmm.status().lifecycle, hal::Lifecycle::connected);
+  cmm.enable();
+  // A guarded move into the block stops at the contact and faults.
+  cmm.move({Vec3(close.start.x(), close.start.y(), 60), 0});
+  EXPECT_THROW(cmm.move({Vec3(close.start.x(), close.start.y(), 20), 0}), hal::EarlyTrigger);
+  EXPECT_NEAR(cmm.status().position.z(), kTop + kRadius, 1e-6);
+}
+
+TYPED_TEST(CmmConformance, EStopLatchesUntilResetThenNeedsHoming) {
+  // Homing from the power-on position takes 3.85 s of machine time; the e-stop input goes active
+  // at 6 s, during the next long move.
+  hal::Cmm& cmm = this->open({{"faults", {{"estop_at_s", 6}}}});
+  cmm.home();
+  EXPECT_THROW(cmm.move({Vec3(300, 400, 100), 0}), hal::EStop);
+  hal::MachineStatus s = cmm.status();
+  EXPECT_TRUE(s.estop);
+  EXPECT_FALSE(s.homed);
+  EXPECT_NEAR(s.t_s, 6, 1e-6);
+  cmm.enable();
+  EXPECT_THROW(cmm.home(), hal::EStop);
+  cmm.reset();
+  cmm.enable();
+  EXPECT_THROW(cmm.move({Vec3(300, 400, 100), 0}), hal::NotHomed);
+  cmm.enable();
+  cmm.home();
+  cmm.move({Vec3(300, 400, 100), 0});
+}
+
+// A long move in wall time (time_scale 20: 750 mm at 200 mm/s takes about 0.2 s), interrupted from
+// another thread once status() shows it moving.
+template <class Fixture, class Interrupt>
+void interrupt_a_long_move(Fixture& fixture, Interrupt interrupt) {
+  hal::Cmm& cmm = fixture.open({{"time_scale", 20}});
+  cmm.home();
+  auto running = std::async(std::launch::async, [&] { cmm.move({Vec3(300, 400, 100), 0}); });
+  const auto deadline = Clock::now() + std::chrono::seconds(5);
+  while (!cmm.status().moving && Clock::now() < deadline) std::this_thread::yield();
+  ASSERT_TRUE(cmm.status().moving);
+  const Vec3 at = cmm.status().position;
+  const auto asked = Clock::now();
+  interrupt(cmm);
+  EXPECT_THROW(running.get(), hal::Aborted);
+  EXPECT_LT(Clock::now() - asked, std::chrono::seconds(1));
+  EXPECT_FALSE(cmm.status().moving);
+  EXPECT_GT((cmm.status().position - Vec3(300, 400, 100)).norm(), 1);  // it did not finish
+  EXPECT_LT((cmm.status().position - at).norm(), 100);
+}
+
+TYPED_TEST(CmmConformance, AbortStopsAtOnceAndLatches) {
+  interrupt_a_long_move(*this, [](hal::Cmm& cmm) { cmm.abort(); });
+  hal::Cmm& cmm = *this->path_.cmm;
+  EXPECT_TRUE(cmm.status().aborted);
+  cmm.enable();
+  EXPECT_THROW(cmm.move({Vec3(300, 400, 100), 0}), hal::Aborted);
+  cmm.reset();
+  cmm.enable();
+  cmm.home();  // a dead stop may have lost the position
+  cmm.move({Vec3(300, 400, 100), 0});
+}
+
+TYPED_TEST(CmmConformance, StopBrakesAndKeepsThePosition) {
+  interrupt_a_long_move(*this, [](hal::Cmm& cmm) { cmm.stop(); });
+  hal::Cmm& cmm = *this->path_.cmm;
+  EXPECT_FALSE(cmm.status().aborted);
+  EXPECT_TRUE(cmm.status().homed);
+  cmm.enable();
+  cmm.move({Vec3(300, 400, 100), 0});  // no reset needed
+}
+
+TYPED_TEST(CmmConformance, QualificationFindsTheTrueTip) {
+  // The real T1 is 1.5 µm smaller and sits a few µm off its nominal offset.
+  const Vec3 offset_error(0.004, -0.003, 0.002);
+  nlohmann::json true_tip = {{"ball_radius_mm", 0.9985},
+                              {"offset_error", {offset_error.x(), offset_error.y(), offset_error.z()}}};
+  hal::Cmm& cmm = this->open({{"true_tips", {{"T1", true_tip}}}});
+  cmm.home();
+  hal::TipQualification q = hal::qualify(cmm, "T1");
+  EXPECT_EQ(q.touches, 9);
+  EXPECT_NEAR(q.ball_radius_mm, 0.9985, 0.003);
+  EXPECT_LT((q.offset - offset_error).norm(), 0.004);
+  EXPECT_LT(q.residual_rms_mm, 3 * kSigma);
+  hal::MachineInfo info = cmm.info();
+  ASSERT_TRUE(info.tips.front().qualification.has_value());
+  EXPECT_EQ(info.tips.front().qualification->time_utc.size(), 20u);  // 2026-11-24T12:00:00Z
+  EXPECT_NEAR(info.tips.front().ball_radius_mm, q.ball_radius_mm, 1e-12);
+  // After qualification a touch on the top reports the ball centre where it really is.
+  hal::TouchResult r = this->touch(cmm, this->top_touch(28, 28));
+  EXPECT_NEAR(r.centre.z(), kTop + 0.9985, 0.006);
+}
+
+TYPED_TEST(CmmConformance, InjectedFaultsSurfaceTypedAndInTime) {
+  auto within = [](auto&& f, double seconds) {
+    const auto t0 = Clock::now();
+    f();
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), seconds);
+  };
+  {
+    hal::Cmm& cmm = this->open({{"faults", {{"drop_link_after_commands", 2}}}});
+    cmm.home();
+    cmm.move({Vec3(300, 400, 100), 0});
+    within([&] { EXPECT_THROW(cmm.move({Vec3(300, 400, 90), 0}), hal::CommLost); }, 5);
+    EXPECT_THROW(cmm.status(), std::exception);  // down: CommLost, or the lifecycle says so
+  }
+  {
+    hal::Cmm& cmm = this->open({{"timeout_s", 0.2}, {"faults", {{"reply_delay_s", 2}}}});
+    within([&] { EXPECT_THROW(cmm.home(), hal::Timeout); }, 1.5);
+  }
+  {
+    hal::Cmm& cmm = this->open({{"faults", {{"corrupt_reply_at_command", 2}}}});
+    cmm.home();
+    within([&] { EXPECT_THROW(cmm.move({Vec3(300, 400, 100), 0}), hal::Protocol); }, 5);
+  }
+  {
+    hal::Cmm& cmm = this->open({{"faults", {{"spurious_trigger_at_motion", 3}}}});
+    cmm.home();
+    hal::ProbeMove p = this->top_touch(28, 28);
+    cmm.move({Vec3(p.start.x(), p.start.y(), 60), 0});
+    within([&] { EXPECT_THROW(cmm.probe(p), hal::EarlyTrigger); }, 5);
+    cmm.enable();
+    EXPECT_TRUE(this->touch(cmm, p).contact);  // the next one is real
+  }
+}
+
+TYPED_TEST(CmmConformance, SameSeedSameTouchesOnEveryPath) {
+  auto run = [&](int seed) {
+    hal::Cmm& cmm = this->open({{"seed", seed}});
+    cmm.home();
+    std::vector<Vec3> touches;
+    for (double x : {10.0, 30.0, 60.0, 80.0})
+      for (double y : {6.0, 30.0, 88.0}) touches.push_back(this->touch(cmm, this->top_touch(x, y)).centre);
+    return touches;
+  };
+  std::vector<Vec3> first = run(7), again = run(7), other = run(8);
+  ASSERT_EQ(first.size(), 12u);
+  double differs = 0;
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    EXPECT_LT((first[i] - again[i]).norm(), 1e-6) << i;
+    differs = std::max(differs, (first[i] - other[i]).norm());
+  }
+  EXPECT_GT(differs, 1e-5);  // the seed does matter
+  touches_by_path()[TypeParam::name()] = first;
+  for (const auto& [name, touches] : touches_by_path())
+    for (std::size_t i = 0; i < first.size(); ++i)
+      EXPECT_LT((touches[i] - first[i]).norm(), 1e-6) << name << " vs " << TypeParam::name() << ", touch " << i;
+}
+
+}  // namespace
+}  // namespace cmm
