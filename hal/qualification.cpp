@@ -1,26 +1,16 @@
 // Qualification on the reference sphere: pole touch, ring touches, sphere fit, record.
 #include "hal/qualification.hpp"
 
-#include <chrono>
 #include <cmath>
-#include <ctime>
 #include <numbers>
 #include <stdexcept>
 
 #include "hal/sphere_fit.hpp"
+#include "hal/utc_time.hpp"
 
 namespace cmm::hal {
 
 namespace {
-std::string utc_now() {
-  auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return text;
-}
-
 const TipInfo& find_tip(const MachineInfo& info, const std::string& id) {
   for (const auto& tip : info.tips)
     if (tip.id == id) return tip;

@@ -19,8 +19,8 @@ auto SimulatedCmm::command(const char* name, bool motion, F&& f) {
   const auto& faults = config_->faults;
   if (link_down_) throw hal::CommLost(std::string(name) + ": the link to the simulator is down");
   const int n = ++commands_;
-  if (faults.drop_link_after_commands > 0 && n > faults.drop_link_after_commands) {
-    link_down_ = true;
+  if (faults.drop_link_after_commands > 0 && n > faults.drop_link_after_commands && !dropped_) {
+    link_down_ = dropped_ = true;  // once: the link may come back, as a cable put back in does
     lifecycle_ = hal::Lifecycle::configured;
     throw hal::CommLost(std::string(name) + ": the link dropped after " +
                         std::to_string(faults.drop_link_after_commands) + " commands");

@@ -52,6 +52,7 @@ class SimulatedCmm : public hal::Cmm {
   std::atomic<hal::Lifecycle> lifecycle_{hal::Lifecycle::unconfigured};
   std::atomic<int> commands_{0};
   std::atomic<bool> link_down_{false};
+  bool dropped_ = false;
 };
 
 }  // namespace cmm::sim

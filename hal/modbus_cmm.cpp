@@ -1,0 +1,390 @@
+// The Modbus driver: command blocks with a sequence echo, status polls on a second context, typed
+// faults from libmodbus's errno, reconnection with backoff, and a heartbeat thread.
+#include "hal/modbus_cmm.hpp"
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+
+#include "hal/config_block.hpp"
+#include "hal/modbus_map.hpp"
+#include "hal/utc_time.hpp"
+
+namespace cmm::hal {
+
+namespace mb = modbus;
+using Clock = std::chrono::steady_clock;
+
+ModbusSettings modbus_settings_from_json(const nlohmann::json& j) {
+  ConfigBlock b(j);
+  ModbusSettings s;
+  b.text("driver", "modbus", {"modbus"});
+  s.transport = b.text("transport", s.transport, {"tcp", "rtu"});
+  s.host = b.text("host", s.host);
+  s.port = b.integer("port", s.port, 1, 65535);
+  s.device = b.text("device", s.device);
+  s.baud = b.integer("baud", s.baud, 1200, 4000000);
+  s.parity = b.text("parity", s.parity, {"N", "E", "O"});
+  s.unit_id = b.integer("unit_id", s.unit_id, 1, 247);
+  s.response_timeout_s = b.number("response_timeout_s", s.response_timeout_s, 0.01, 60);
+  s.motion_timeout_s = b.number("motion_timeout_s", s.motion_timeout_s, 0.1, 86400);
+  s.poll_interval_s = b.number("poll_interval_s", s.poll_interval_s, 0, 1);
+  s.heartbeat_s = b.number("heartbeat_s", s.heartbeat_s, 0, 10);
+  s.heartbeat_timeout_s = b.number("heartbeat_timeout_s", s.heartbeat_timeout_s, 0.01, 60);
+  s.connect_attempts = b.integer("connect_attempts", s.connect_attempts, 1, 100);
+  s.connect_backoff_s = b.number("connect_backoff_s", s.connect_backoff_s, 0, 60);
+  if (s.transport == "rtu" && s.device.empty()) b.problem("device", "the serial device is required for transport rtu");
+  if (s.heartbeat_s > 0 && s.heartbeat_s >= s.heartbeat_timeout_s)
+    b.problem("heartbeat_s", "must be shorter than heartbeat_timeout_s, or the machine stops between beats");
+  b.finish();
+  b.throw_if_problems("modbus driver config");
+  return s;
+}
+
+ModbusCmm::~ModbusCmm() { disconnect(); }
+
+void ModbusCmm::require(Lifecycle at_least, const char* what) const {
+  if (lifecycle_.load() < at_least)
+    throw StateError(std::string(what) + ": the Modbus machine is " + to_string(lifecycle_.load()) + ", needs " +
+                     to_string(at_least));
+}
+
+void ModbusCmm::configure(const nlohmann::json& block) {
+  if (lifecycle_ >= Lifecycle::connected) throw StateError("configure: disconnect first");
+  settings_ = modbus_settings_from_json(block);
+  lifecycle_ = Lifecycle::configured;
+}
+
+modbus_t* ModbusCmm::open_context() const {
+  modbus_t* ctx = settings_.transport == "rtu"
+                      ? modbus_new_rtu(settings_.device.c_str(), settings_.baud, settings_.parity[0], 8, 1)
+                      : modbus_new_tcp(settings_.host.c_str(), settings_.port);
+  if (!ctx) return nullptr;
+  modbus_set_slave(ctx, settings_.unit_id);
+  const double t = settings_.response_timeout_s;
+  modbus_set_response_timeout(ctx, static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(std::fmod(t, 1.0) * 1e6));
+  if (modbus_connect(ctx) < 0) {
+    modbus_free(ctx);
+    return nullptr;
+  }
+  return ctx;
+}
+
+void ModbusCmm::close_contexts() {
+  std::scoped_lock lock(command_mutex_, aux_mutex_);
+  for (modbus_t** ctx : {&command_ctx_, &aux_ctx_})
+    if (*ctx) {
+      modbus_close(*ctx);
+      modbus_free(*ctx);
+      *ctx = nullptr;
+    }
+}
+
+void ModbusCmm::connect() {
+  require(Lifecycle::configured, "connect");
+  if (lifecycle_ >= Lifecycle::connected) return;
+  stop_heartbeat();  // a link that dropped left its heartbeat thread behind
+  close_contexts();
+  const std::string where = settings_.transport == "rtu" ? settings_.device : settings_.host + ":" + std::to_string(settings_.port);
+  double backoff = settings_.connect_backoff_s;
+  int error = 0;
+  for (int attempt = 0; attempt < settings_.connect_attempts; ++attempt) {
+    if (attempt > 0) std::this_thread::sleep_for(std::chrono::duration<double>(backoff)), backoff *= 2;
+    modbus_t* command = open_context();
+    error = errno;
+    modbus_t* aux = command && settings_.transport == "tcp" ? open_context() : nullptr;
+    if (command && (aux || settings_.transport == "rtu")) {
+      std::scoped_lock lock(command_mutex_, aux_mutex_);
+      command_ctx_ = command, aux_ctx_ = aux;
+      break;
+    }
+    error = errno;
+    if (command) modbus_close(command), modbus_free(command);
+  }
+  if (!command_ctx_)
+    throw CommLost("cannot reach the Modbus machine at " + where + " after " + std::to_string(settings_.connect_attempts) +
+                   " attempts: " + modbus_strerror(error));
+  lifecycle_ = Lifecycle::connected;
+  try {
+    const auto version = read(command_link(), mb::address("protocol_version"), 1, "connect");
+    if (version[0] != mb::kProtocolVersion)
+      throw Protocol("the machine at " + where + " speaks register map version " + std::to_string(version[0]) +
+                     ", this driver version " + std::to_string(mb::kProtocolVersion));
+    info();  // the tip table
+    // The sequence continues from the machine's last echo, so a reconnect never repeats a number
+    // the machine has already acted on.
+    seq_ = read(command_link(), mb::address("done_seq"), 1, "connect")[0];
+    if (settings_.heartbeat_s > 0) {
+      write_single(command_link(), mb::address("heartbeat_timeout"),
+                   static_cast<std::uint16_t>(std::lround(settings_.heartbeat_timeout_s * 1000)), "connect");
+      heartbeat_stop_ = false;
+      heartbeat_ = std::thread([this] { heartbeat_loop(); });
+    }
+  } catch (...) {
+    lifecycle_ = Lifecycle::configured;
+    close_contexts();
+    throw;
+  }
+}
+
+void ModbusCmm::enable() {
+  require(Lifecycle::connected, "enable");
+  lifecycle_ = Lifecycle::enabled;
+}
+
+void ModbusCmm::disable() {
+  if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+}
+
+void ModbusCmm::stop_heartbeat() {
+  {
+    std::lock_guard lock(heartbeat_mutex_);
+    heartbeat_stop_ = true;
+    heartbeat_wake_.notify_all();
+  }
+  if (heartbeat_.joinable()) heartbeat_.join();
+}
+
+void ModbusCmm::disconnect() {
+  stop_heartbeat();
+  close_contexts();
+  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+}
+
+void ModbusCmm::heartbeat_loop() {
+  std::uint16_t beat = 0;
+  std::unique_lock lock(heartbeat_mutex_);
+  while (!heartbeat_wake_.wait_for(lock, std::chrono::duration<double>(settings_.heartbeat_s), [&] { return heartbeat_stop_; })) {
+    lock.unlock();
+    try {
+      write_single(aux_link(), mb::address("heartbeat"), ++beat, "heartbeat");
+    } catch (const std::exception&) {
+      // A missed beat is the point of a heartbeat: the machine notices; the next call reports the link.
+    }
+    lock.lock();
+  }
+}
+
+void ModbusCmm::link_failed(const char* what, int error) {
+  const std::string message = std::string(what) + ": " + modbus_strerror(error);
+  switch (error) {
+    case ETIMEDOUT:
+      throw Timeout(message + " (no answer within " + std::to_string(settings_.response_timeout_s) + " s)");
+    case EMBBADCRC: case EMBBADDATA: case EMBBADEXC: case EMBMDATA: case EMBBADSLAVE:
+    case EMBXILFUN: case EMBXILADD: case EMBXILVAL: case EMBXSFAIL:
+      throw Protocol(message);
+    default:
+      // The connection itself is gone: a motion's outcome is unknown and nothing is replayed;
+      // connect() brings the link back and re-reads the machine.
+      if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+      throw CommLost(message);
+  }
+}
+
+std::vector<std::uint16_t> ModbusCmm::read(Link link, int address, int count, const char* what) {
+  std::vector<std::uint16_t> regs(static_cast<std::size_t>(count));
+  std::lock_guard lock(*link.mutex);
+  if (!link.ctx || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
+  if (modbus_read_registers(link.ctx, address, count, regs.data()) != count) {
+    const int error = errno;  // before the flush, which sets its own
+    modbus_flush(link.ctx);
+    link_failed(what, error);
+  }
+  return regs;
+}
+
+void ModbusCmm::write_single(Link link, int address, std::uint16_t value, const char* what) {
+  std::lock_guard lock(*link.mutex);
+  if (!link.ctx || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
+  if (modbus_write_register(link.ctx, address, value) != 1) {
+    const int error = errno;  // before the flush, which sets its own
+    modbus_flush(link.ctx);
+    link_failed(what, error);
+  }
+}
+
+std::vector<std::uint16_t> ModbusCmm::run_command(std::vector<std::uint16_t> block, const char* what, bool motion) {
+  require(motion ? Lifecycle::enabled : Lifecycle::connected, what);
+  try {
+    seq_ = static_cast<std::uint16_t>(seq_ % 65535 + 1);
+    block[0] = seq_;
+    {
+      std::lock_guard lock(command_mutex_);
+      if (!command_ctx_ || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
+      if (modbus_write_registers(command_ctx_, mb::kCommandFirst, mb::kCommandCount, block.data()) != mb::kCommandCount) {
+        const int error = errno;  // before the flush, which sets its own
+        modbus_flush(command_ctx_);
+        link_failed(what, error);
+      }
+    }
+    const auto deadline = Clock::now() + std::chrono::duration<double>(settings_.motion_timeout_s);
+    for (;;) {
+      auto regs = read(command_link(), mb::kStatusFirst, mb::kStatusCount, what);
+      if (regs[mb::address("done_seq")] == seq_) {
+        if (const std::uint16_t result = regs[mb::address("done_result")]) {
+          const auto text = read(command_link(), mb::address("fault_text"), 64, what);
+          throw_fault(mb::fault_from_code(result), mb::get_ascii(text.data(), 64));
+        }
+        return regs;
+      }
+      if (Clock::now() > deadline) {
+        stop();  // whatever it is doing, it should not go on unwatched
+        throw Timeout(std::string(what) + ": no echo of command " + std::to_string(seq_) + " within " +
+                      std::to_string(settings_.motion_timeout_s) + " s");
+      }
+      if (settings_.poll_interval_s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(settings_.poll_interval_s));
+    }
+  } catch (const Fault&) {
+    if (motion && lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+    throw;
+  }
+}
+
+namespace {
+std::vector<std::uint16_t> empty_block(std::uint16_t opcode) {
+  std::vector<std::uint16_t> block(mb::kCommandCount, 0);
+  block[1] = opcode;
+  return block;
+}
+std::uint16_t* field(std::vector<std::uint16_t>& block, std::uint16_t address) {
+  return block.data() + (address - mb::kCommandFirst);
+}
+void put_vec(std::uint16_t* regs, const Vec3& v, double unit) {
+  for (int i = 0; i < 3; ++i) mb::put_i32(regs + 2 * i, static_cast<std::int32_t>(std::lround(v[i] / unit)));
+}
+Vec3 get_vec(const std::uint16_t* regs) {
+  return Vec3(mb::get_i32(regs), mb::get_i32(regs + 2), mb::get_i32(regs + 4)) * 1e-6;
+}
+}  // namespace
+
+MachineStatus ModbusCmm::decode_status(const std::vector<std::uint16_t>& r) const {
+  MachineStatus s;
+  s.lifecycle = lifecycle_;
+  const std::uint16_t flags = r[mb::address("flags")];
+  s.homed = flags & mb::homed;
+  s.moving = flags & mb::moving;
+  s.estop = flags & mb::estop;
+  s.aborted = flags & mb::aborted;
+  if (const std::uint16_t code = r[mb::address("fault_code")]) s.fault = mb::fault_from_code(code);
+  s.position = get_vec(&r[mb::address("position_x")]);
+  s.t_s = mb::get_u32(&r[mb::address("clock")]) * 1e-3;
+  const std::size_t tip = r[mb::address("active_tip")];
+  s.tip_id = tip < tip_ids_.size() ? tip_ids_[tip] : "";
+  return s;
+}
+
+MachineStatus ModbusCmm::status() {
+  require(Lifecycle::connected, "status");
+  auto regs = read(aux_link(), mb::kStatusFirst, mb::kStatusCount, "status");
+  MachineStatus s = decode_status(regs);
+  if (s.fault) s.fault_message = mb::get_ascii(read(aux_link(), mb::address("fault_text"), 64, "status").data(), 64);
+  return s;
+}
+
+MachineInfo ModbusCmm::info() {
+  require(Lifecycle::connected, "info");
+  auto r = read(aux_link(), mb::kInfoFirst, mb::kInfoCount, "info");
+  auto at = [&](std::uint16_t address) { return &r[static_cast<std::size_t>(address - mb::kInfoFirst)]; };
+  MachineInfo info;
+  info.driver = "modbus";
+  info.description = "Modbus machine at " +
+                     (settings_.transport == "rtu" ? settings_.device : settings_.host + ":" + std::to_string(settings_.port));
+  info.travel_box = TravelBox{get_vec(at(mb::address("box_min_x"))), get_vec(at(mb::address("box_max_x")))};
+  info.max_speed_mm_s = mb::get_u32(at(mb::address("max_speed"))) * 1e-3;
+  info.max_accel_mm_s2 = mb::get_u32(at(mb::address("max_accel"))) * 1e-3;
+  info.probe_speed_mm_s = mb::get_u32(at(mb::address("probe_speed"))) * 1e-3;
+  info.reference_sphere = ReferenceSphereInfo{get_vec(at(mb::address("sphere_x"))), mb::get_u32(at(mb::address("sphere_radius"))) * 1e-6};
+  const int tips = std::min<int>(*at(mb::address("tip_count")), mb::kMaxTips);
+  constexpr int entry = mb::address("tip_touches") + 1 - mb::address("tip_id");
+  std::vector<std::string> ids;
+  for (int i = 0; i < tips; ++i) {
+    auto t = read(aux_link(), mb::address("tip_id") + i * mb::kTipStride, entry, "info");
+    auto in = [&](std::uint16_t address) { return &t[static_cast<std::size_t>(address - mb::address("tip_id"))]; };
+    TipInfo tip;
+    tip.id = mb::get_ascii(in(mb::address("tip_id")), 4);
+    tip.ball_radius_mm = mb::get_u32(in(mb::address("tip_radius"))) * 1e-6;
+    tip.offset = get_vec(in(mb::address("tip_offset_x")));
+    if (const std::uint32_t when = mb::get_u32(in(mb::address("tip_qualified")))) {
+      TipQualification q;
+      q.ball_radius_mm = tip.ball_radius_mm;
+      q.offset = tip.offset;
+      q.residual_rms_mm = mb::get_u32(in(mb::address("tip_residual"))) * 1e-6;
+      q.touches = *in(mb::address("tip_touches"));
+      q.time_utc = utc_text(when);
+      tip.qualification = q;
+    }
+    ids.push_back(tip.id);
+    info.tips.push_back(tip);
+  }
+  tip_ids_ = ids;
+  const std::size_t active = read(aux_link(), mb::address("active_tip"), 1, "info")[0];
+  info.active_tip = active < ids.size() ? ids[active] : "";
+  return info;
+}
+
+void ModbusCmm::home() { run_command(empty_block(mb::Opcode::home), "home", true); }
+
+void ModbusCmm::move(const Move& move) {
+  auto block = empty_block(mb::Opcode::move);
+  put_vec(field(block, mb::address("x")), move.target, 1e-6);
+  mb::put_u32(field(block, mb::address("speed")), mb::to_unsigned(move.speed_mm_s, 1e-3));
+  run_command(block, "move", true);
+}
+
+TouchResult ModbusCmm::probe(const ProbeMove& move) {
+  auto block = empty_block(mb::Opcode::probe);
+  put_vec(field(block, mb::address("x")), move.start, 1e-6);
+  put_vec(field(block, mb::address("dir_x")), move.direction.normalized(), 1e-9);
+  mb::put_u32(field(block, mb::address("speed")), mb::to_unsigned(move.speed_mm_s, 1e-3));
+  mb::put_u32(field(block, mb::address("max_travel")), mb::to_unsigned(move.max_travel_mm, 1e-6));
+  mb::put_u32(field(block, mb::address("min_travel")), mb::to_unsigned(move.min_travel_mm, 1e-6));
+  mb::put_u32(field(block, mb::address("retract")), mb::to_unsigned(move.retract_mm, 1e-6));
+  *field(block, mb::address("probe_flags")) = move.fail_on_miss ? 1 : 0;
+  auto r = run_command(block, "probe", true);
+  TouchResult t;
+  t.contact = r[mb::address("touch_contact")] != 0;
+  t.centre = get_vec(&r[mb::address("touch_x")]);
+  t.travel_mm = mb::get_u32(&r[mb::address("touch_travel")]) * 1e-6;
+  t.t_s = mb::get_u32(&r[mb::address("touch_clock")]) * 1e-3;
+  t.tip_id = decode_status(r).tip_id;
+  if (!t.contact) t.centre = decode_status(r).position;
+  return t;
+}
+
+void ModbusCmm::stop() {
+  if (lifecycle_ < Lifecycle::connected) return;
+  write_single(aux_link(), mb::address("urgent"), mb::Urgent::stop, "stop");
+}
+
+void ModbusCmm::abort() {
+  if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+  if (lifecycle_ < Lifecycle::connected) return;
+  write_single(aux_link(), mb::address("urgent"), mb::Urgent::abort, "abort");
+}
+
+void ModbusCmm::reset() { run_command(empty_block(mb::Opcode::reset), "reset", false); }
+
+int ModbusCmm::tip_index(const std::string& id) {
+  for (std::size_t i = 0; i < tip_ids_.size(); ++i)
+    if (tip_ids_[i] == id) return static_cast<int>(i);
+  throw std::invalid_argument("no tip \"" + id + "\" on the Modbus machine");
+}
+
+void ModbusCmm::select_tip(const std::string& tip_id) {
+  auto block = empty_block(mb::Opcode::select_tip);
+  *field(block, mb::address("tip")) = static_cast<std::uint16_t>(tip_index(tip_id));
+  run_command(block, "select_tip", false);
+}
+
+void ModbusCmm::record_qualification(const std::string& tip_id, const TipQualification& q) {
+  auto block = empty_block(mb::Opcode::set_tip);
+  *field(block, mb::address("tip")) = static_cast<std::uint16_t>(tip_index(tip_id));
+  put_vec(field(block, mb::address("x")), q.offset, 1e-6);
+  mb::put_u32(field(block, mb::address("max_travel")), mb::to_unsigned(q.ball_radius_mm, 1e-6));
+  mb::put_u32(field(block, mb::address("min_travel")), static_cast<std::uint32_t>(unix_seconds(q.time_utc)));
+  mb::put_u32(field(block, mb::address("retract")), mb::to_unsigned(q.residual_rms_mm, 1e-6));
+  *field(block, mb::address("touches")) = static_cast<std::uint16_t>(q.touches);
+  run_command(block, "record_qualification", false);
+}
+
+}  // namespace cmm::hal

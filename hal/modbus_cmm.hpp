@@ -1,0 +1,95 @@
+// hal::Cmm over Modbus (TCP or RTU) with libmodbus, speaking the register map of
+// hal/modbus_map.hpp: one atomic command block per motion, its sequence echo, a heartbeat.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <modbus/modbus.h>
+
+#include "hal/cmm.hpp"
+
+namespace cmm::hal {
+
+struct ModbusSettings {
+  std::string transport = "tcp";  // tcp | rtu
+  std::string host = "127.0.0.1";
+  int port = 502;
+  std::string device;  // rtu
+  int baud = 115200;
+  std::string parity = "N";  // N | E | O
+  int unit_id = 1;
+  double response_timeout_s = 1;   // one request's answer
+  double motion_timeout_s = 600;   // one command, from the write to the machine's echo
+  double poll_interval_s = 0.002;  // while waiting for the echo
+  double heartbeat_s = 0.1;        // 0: no heartbeat
+  double heartbeat_timeout_s = 1;  // the machine stops when the heartbeat is this old
+  int connect_attempts = 4;
+  double connect_backoff_s = 0.05;  // doubled after each failed attempt
+};
+
+ModbusSettings modbus_settings_from_json(const nlohmann::json& block);  // throws ConfigError
+
+// Threads: the motion calls use one context; status(), stop() and abort() use a second one (TCP)
+// so they answer while a motion runs. On RTU there is one line and one context, shared under a
+// lock that the motion thread drops between polls.
+class ModbusCmm : public Cmm {
+ public:
+  ModbusCmm() = default;
+  ~ModbusCmm() override;
+
+  void configure(const nlohmann::json& block) override;
+  void connect() override;
+  void enable() override;
+  void disable() override;
+  void disconnect() override;
+  MachineInfo info() override;
+  MachineStatus status() override;
+  void home() override;
+  void move(const Move& move) override;
+  TouchResult probe(const ProbeMove& move) override;
+  void stop() override;
+  void abort() override;
+  void reset() override;
+  void select_tip(const std::string& tip_id) override;
+  void record_qualification(const std::string& tip_id, const TipQualification& q) override;
+
+ private:
+  struct Link {
+    modbus_t* ctx = nullptr;
+    std::mutex* mutex = nullptr;
+  };
+  modbus_t* open_context() const;
+  void close_contexts();
+  void require(Lifecycle at_least, const char* what) const;
+  [[noreturn]] void link_failed(const char* what, int error);  // maps an errno to CommLost, Timeout or Protocol
+  std::vector<std::uint16_t> read(Link link, int address, int count, const char* what);
+  void write_single(Link link, int address, std::uint16_t value, const char* what);
+  // Writes one command block, waits for its echo and returns the status block read with it.
+  std::vector<std::uint16_t> run_command(std::vector<std::uint16_t> block, const char* what, bool motion);
+  MachineStatus decode_status(const std::vector<std::uint16_t>& regs) const;
+  int tip_index(const std::string& id);
+  void heartbeat_loop();
+  void stop_heartbeat();
+  Link command_link() { return {command_ctx_, &command_mutex_}; }
+  Link aux_link() { return {aux_ctx_ ? aux_ctx_ : command_ctx_, aux_ctx_ ? &aux_mutex_ : &command_mutex_}; }
+
+  ModbusSettings settings_;
+  std::atomic<Lifecycle> lifecycle_{Lifecycle::unconfigured};
+  modbus_t* command_ctx_ = nullptr;
+  modbus_t* aux_ctx_ = nullptr;  // null on RTU
+  std::mutex command_mutex_, aux_mutex_;
+  std::uint16_t seq_ = 0;
+  std::vector<std::string> tip_ids_;  // the machine's tip table, read at connect
+  std::thread heartbeat_;
+  std::mutex heartbeat_mutex_;
+  std::condition_variable heartbeat_wake_;
+  bool heartbeat_stop_ = false;
+};
+
+}  // namespace cmm::hal
