@@ -13,27 +13,14 @@
 
 #include "dmis_checker.hpp"
 #include "planner/machine.hpp"
+#include "tests/tools/run_command.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-CommandResult run(const std::string& command) {
-  CommandResult result{-1, {}};
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return result;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
+using cmm::test::CommandResult;
+using cmm::test::run_command;
 
 // A registration scene with a known truth: the 200 × 150 mm plate of config/plate.json under the
 // case-3 block, its frame P at (−50, −30, 0) in S, and S turned 30° about z and moved by
@@ -70,11 +57,11 @@ class CmmPlan : public ::testing::Test {
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
   CommandResult plan(const std::string& model, const std::string& output, const std::string& flags = "") const {
-    return run(std::string(CMMD_BINARY_DIR) + "/planner/cmm-plan " + model + " -o " + output + " " + flags);
+    return run_command(std::string(CMMD_BINARY_DIR) + "/planner/cmm-plan " + model + " -o " + output + " " + flags);
   }
 
   void make_part(const std::string& part, const std::string& file, const std::string& flags = "") const {
-    const CommandResult r = run(std::string(CMMD_BINARY_DIR) + "/tests/make-analytic-part " + part + " -o " + file + " " + flags);
+    const CommandResult r = run_command(std::string(CMMD_BINARY_DIR) + "/tests/make-analytic-part " + part + " -o " + file + " " + flags);
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
 
@@ -84,8 +71,8 @@ class CmmPlan : public ::testing::Test {
   }
 
   static void expect_valid(const std::string& plan_file) {
-    const CommandResult r = run(std::string(CMMD_SYSTEM_PYTHON) + " " CMMD_SOURCE_DIR "/tests/planner/validate_plan.py " +
-                      CMMD_SOURCE_DIR "/docs/plan.schema.json " + plan_file);
+    const CommandResult r = run_command(std::string(CMMD_SYSTEM_PYTHON) + " " CMMD_SOURCE_DIR "/tests/planner/validate_plan.py " +
+                                        CMMD_SOURCE_DIR "/docs/plan.schema.json " + plan_file);
     EXPECT_EQ(r.exit_code, 0) << r.output;
   }
 
