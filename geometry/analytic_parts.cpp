@@ -157,4 +157,20 @@ TriangleMesh with_gaussian_noise(const TriangleMesh& mesh, double sigma_mm, std:
   return noisy;
 }
 
+const std::vector<std::string>& analytic_part_names() {
+  static const std::vector<std::string> names = {"cube", "case3_block", "plate_with_holes", "bicone", "hemisphere_cone"};
+  return names;
+}
+
+AnalyticPart make_analytic_part(const std::string& name, double edge_length) {
+  if (name == "cube") return make_cube(40, edge_length);
+  if (name == "case3_block") return make_case3_block(edge_length);
+  if (name == "plate_with_holes") return make_plate_with_holes(edge_length);
+  if (name == "bicone") return make_bicone(25, 37.5, edge_length);
+  if (name == "hemisphere_cone") return make_hemisphere_cone(25, 25, edge_length);
+  std::string known;
+  for (const auto& n : analytic_part_names()) known += (known.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown analytic part \"" + name + "\" (known: " + known + ")");
+}
+
 }  // namespace cmm::geometry

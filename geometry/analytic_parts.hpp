@@ -57,6 +57,12 @@ AnalyticPart make_bicone(double radius_mm, double height_mm, double edge_length)
 // Thesis Table 5.2: a hemisphere of radius R below a cone of height H on the same rim (axis z).
 AnalyticPart make_hemisphere_cone(double radius_mm, double height_mm, double edge_length);
 
+// The parts by name, at the sizes every tool and the simulator use (cube 40 mm; bicone R 25, H 37.5;
+// hemisphere-cone R 25, H 25), so a plan, a scan and a simulated part of one name agree.
+const std::vector<std::string>& analytic_part_names();  // cube, case3_block, plate_with_holes, bicone, hemisphere_cone
+// Throws std::invalid_argument naming the known parts for any other name.
+AnalyticPart make_analytic_part(const std::string& name, double edge_length);
+
 // Isotropic Gaussian noise of standard deviation sigma on every vertex coordinate; same seed, same mesh.
 TriangleMesh with_gaussian_noise(const TriangleMesh& mesh, double sigma_mm, std::uint64_t seed);
 

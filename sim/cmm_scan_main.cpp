@@ -5,9 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <iostream>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -32,20 +30,8 @@ struct Options {
 
 nlohmann::json vec(const geometry::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
-// The parts by name, at the sizes make-analytic-part gives them, so a scan and a plan of a part agree.
-const std::map<std::string, std::function<geometry::AnalyticPart(double)>>& parts() {
-  static const std::map<std::string, std::function<geometry::AnalyticPart(double)>> by_name = {
-      {"cube", [](double h) { return geometry::make_cube(40, h); }},
-      {"case3_block", [](double h) { return geometry::make_case3_block(h); }},
-      {"plate_with_holes", [](double h) { return geometry::make_plate_with_holes(h); }},
-      {"bicone", [](double h) { return geometry::make_bicone(25, 37.5, h); }},
-      {"hemisphere_cone", [](double h) { return geometry::make_hemisphere_cone(25, 25, h); }},
-  };
-  return by_name;
-}
-
 int scan(const Options& o) {
-  const geometry::AnalyticPart part = parts().at(o.part)(o.edge_length);
+  const geometry::AnalyticPart part = geometry::make_analytic_part(o.part, o.edge_length);
   sim::ViewSetOptions view_options = o.views;
   view_options.seed = o.seed;
   const std::vector<sim::ScanView> views = sim::default_views(view_options);
@@ -106,8 +92,7 @@ int scan(const Options& o) {
 int main(int argc, char** argv) {
   CLI::App app{"cmm-scan: synthesize the scan of an analytic test part (scanned reference mesh, raw cloud)"};
   Options o;
-  std::vector<std::string> names;
-  for (const auto& [name, make] : parts()) names.push_back(name);
+  const std::vector<std::string>& names = geometry::analytic_part_names();
   app.add_option("--part", o.part, "the true part")
       ->required()
       ->check(CLI::IsMember(names));

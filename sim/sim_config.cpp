@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <numbers>
 
-#include "geometry/file_error.hpp"
+#include "geometry/analytic_parts.hpp"
 
 namespace cmm::sim {
 
@@ -72,8 +72,8 @@ SimConfig sim_config_from_json(const nlohmann::json& j, const std::string& base_
 
   {
     hal::ConfigBlock part = block.object("part");
-    c.part.analytic = part.text("analytic", c.part.analytic,
-                                {"cube", "case3_block", "plate_with_holes", "bicone", "hemisphere_cone"});
+    const auto& names = geometry::analytic_part_names();
+    c.part.analytic = part.text("analytic", c.part.analytic, std::set<std::string>(names.begin(), names.end()));
     c.part.edge_length_mm = part.number("edge_length_mm", c.part.edge_length_mm, 0.05, 50);
     c.part.mesh_file = part.text("mesh", "");
     if (!c.part.mesh_file.empty()) c.part.mesh_file = resolve(c.part.mesh_file, base_dir).string();

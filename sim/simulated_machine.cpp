@@ -39,12 +39,7 @@ geometry::TriangleMesh part_mesh(const PartSource& part) {
     mesh.vertices *= part.scale;
     return mesh;
   }
-  const double h = part.edge_length_mm;
-  if (part.analytic == "cube") return geometry::make_cube(40, h).mesh;
-  if (part.analytic == "plate_with_holes") return geometry::make_plate_with_holes(h).mesh;
-  if (part.analytic == "bicone") return geometry::make_bicone(30, 20, h).mesh;
-  if (part.analytic == "hemisphere_cone") return geometry::make_hemisphere_cone(30, 20, h).mesh;
-  return geometry::make_case3_block(h).mesh;
+  return geometry::make_analytic_part(part.analytic, part.edge_length_mm).mesh;
 }
 }  // namespace
 

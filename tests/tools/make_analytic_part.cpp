@@ -2,7 +2,6 @@
 // noise, so tests (and the README's sample) can run the real cmm-plan binary on a known part.
 #include <CLI/CLI.hpp>
 #include <iostream>
-#include <map>
 
 #include "geometry/analytic_parts.hpp"
 #include "geometry/mesh_io.hpp"
@@ -14,13 +13,6 @@ int main(int argc, char** argv) {
   double edge_length = 2, sigma = 0;
   std::uint64_t seed = 1;
   bool open_bores = false;
-  const std::map<std::string, std::function<AnalyticPart(double)>> parts = {
-      {"cube", [](double h) { return make_cube(40, h); }},
-      {"case3_block", [](double h) { return make_case3_block(h); }},
-      {"plate_with_holes", [](double h) { return make_plate_with_holes(h); }},
-      {"bicone", [](double h) { return make_bicone(25, 37.5, h); }},
-      {"hemisphere_cone", [](double h) { return make_hemisphere_cone(25, 25, h); }},
-  };
   app.add_option("PART", name, "cube, case3_block, plate_with_holes, bicone or hemisphere_cone")->required();
   app.add_option("-o,--output", output, "file to write; the format follows the extension")->required();
   app.add_option("--edge-length", edge_length, "target mesh edge length, mm")->check(CLI::PositiveNumber);
@@ -28,12 +20,13 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "noise seed");
   app.add_flag("--open-bores", open_bores, "drop the bore walls, as a scan from above loses them");
   CLI11_PARSE(app, argc, argv);
-  const auto maker = parts.find(name);
-  if (maker == parts.end()) {
-    std::cerr << "make-analytic-part: unknown part '" << name << "'\n";
+  AnalyticPart part;
+  try {
+    part = make_analytic_part(name, edge_length);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "make-analytic-part: " << e.what() << "\n";
     return 2;
   }
-  AnalyticPart part = maker->second(edge_length);
   if (open_bores) {
     // A bore wall face has its normal across the hole axis and lies within the hole radius + ε.
     TriangleMesh& m = part.mesh;
