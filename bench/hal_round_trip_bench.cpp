@@ -1,0 +1,103 @@
+// HAL round trips per second on each path against its bare transport, in one run: the driver's own
+// overhead (encoding, the sequence echo, lifecycle checks) should be small beside the transport's.
+// The Modbus server is cmm-sim's own, run in this process on loopback TCP.
+#include <benchmark/benchmark.h>
+
+#include <modbus/modbus.h>
+
+#include <memory>
+#include <thread>
+
+#include "hal/modbus_cmm.hpp"
+#include "hal/modbus_map.hpp"
+#include "sim/modbus_server.hpp"
+#include "sim/simulated_cmm.hpp"
+
+namespace {
+
+using namespace cmm;
+
+// One simulated machine served over Modbus TCP for the whole run.
+struct ModbusRig {
+  sim::SimConfig config = sim::sim_config_from_json({{"part", {{"analytic", "cube"}, {"edge_length_mm", 4}}}});
+  sim::SimulatedMachine machine{config};
+  sim::ModbusServer server{machine, config.faults, "127.0.0.1", 0};
+  std::thread loop{[this] { server.serve(); }};
+  ~ModbusRig() {
+    server.shutdown();
+    loop.join();
+  }
+};
+ModbusRig& rig() {
+  static ModbusRig r;
+  return r;
+}
+
+std::unique_ptr<hal::ModbusCmm> modbus_driver() {
+  auto cmm = std::make_unique<hal::ModbusCmm>();
+  cmm->configure({{"driver", "modbus"}, {"port", rig().server.port()}, {"poll_interval_s", 0}, {"heartbeat_s", 0}});
+  cmm->connect();
+  cmm->enable();
+  return cmm;
+}
+
+// The transport alone: libmodbus reading the 25-register status block from the same server.
+void bm_modbus_bare_read(benchmark::State& state) {
+  modbus_t* ctx = modbus_new_tcp("127.0.0.1", rig().server.port());
+  modbus_connect(ctx);
+  std::uint16_t regs[hal::modbus::kStatusCount];
+  for (auto _ : state)
+    if (modbus_read_registers(ctx, hal::modbus::kStatusFirst, hal::modbus::kStatusCount, regs) < 0) state.SkipWithError("read");
+  state.SetItemsProcessed(state.iterations());
+  modbus_close(ctx);
+  modbus_free(ctx);
+}
+
+// hal::ModbusCmm::status(): the same read, decoded into a MachineStatus.
+void bm_modbus_status(benchmark::State& state) {
+  auto cmm = modbus_driver();
+  for (auto _ : state) benchmark::DoNotOptimize(cmm->status());
+  state.SetItemsProcessed(state.iterations());
+}
+
+// A command's bare transport: one block write and one status read (the least a command can cost).
+void bm_modbus_bare_command(benchmark::State& state) {
+  modbus_t* ctx = modbus_new_tcp("127.0.0.1", rig().server.port());
+  modbus_connect(ctx);
+  std::uint16_t block[hal::modbus::kCommandCount] = {}, regs[hal::modbus::kStatusCount];
+  for (auto _ : state) {
+    modbus_write_registers(ctx, hal::modbus::kCommandFirst, hal::modbus::kCommandCount, block);  // seq 0: ignored
+    modbus_read_registers(ctx, hal::modbus::kStatusFirst, hal::modbus::kStatusCount, regs);
+  }
+  state.SetItemsProcessed(state.iterations());
+  modbus_close(ctx);
+  modbus_free(ctx);
+}
+
+// hal::ModbusCmm::move() to where the machine already is: a whole command with its echo, no motion.
+void bm_modbus_move(benchmark::State& state) {
+  auto cmm = modbus_driver();
+  cmm->home();
+  const hal::Move here{cmm->status().position, 0};
+  for (auto _ : state) cmm->move(here);
+  state.SetItemsProcessed(state.iterations());
+}
+
+// The in-process simulator, for scale: no transport at all.
+void bm_in_process_status(benchmark::State& state) {
+  sim::SimulatedCmm cmm;
+  cmm.configure({{"part", {{"analytic", "cube"}, {"edge_length_mm", 4}}}});
+  cmm.connect();
+  for (auto _ : state) benchmark::DoNotOptimize(cmm.status());
+  state.SetItemsProcessed(state.iterations());
+}
+
+BENCHMARK(bm_modbus_bare_read)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_modbus_status)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_modbus_bare_command)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_modbus_move)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_in_process_status)->UseRealTime()->MinTime(0.5);
+
+}  // namespace
+
+BENCHMARK_MAIN();
