@@ -21,7 +21,7 @@ using namespace cmm;
 struct ModbusRig {
   sim::SimConfig config = sim::sim_config_from_json({{"part", {{"analytic", "cube"}, {"edge_length_mm", 4}}}});
   sim::SimulatedMachine machine{config};
-  sim::ModbusServer server{machine, config.faults, "127.0.0.1", 0};
+  sim::ModbusServer server{machine, config.faults, sim::ModbusTcpEndpoint{}};
   std::thread loop{[this] { server.serve(); }};
   ~ModbusRig() {
     server.shutdown();

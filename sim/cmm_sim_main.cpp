@@ -27,12 +27,16 @@ int main(int argc, char** argv) {
   int port = 0;
   double time_scale = -1;
   bool print_map = false;
+  std::string rtu_device;
+  int rtu_baud = 115200;
   app.add_option("--config", config_file, "simulator config JSON (docs/hal.md); default: the built-in machine")
       ->check(CLI::ExistingFile);
   app.add_option("--host", host, "address to listen on (loopback unless you mean otherwise)");
   app.add_option("--port", port, "Modbus TCP port; 0 picks a free one (see the ready line)")->check(CLI::Range(0, 65535));
   app.add_option("--time-scale", time_scale, "run motion in wall time / this; 0 = no wall time (overrides the config)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--modbus-rtu", rtu_device, "also serve Modbus RTU (unit 1, 8N1) on this serial device, e.g. a socat pty");
+  app.add_option("--modbus-rtu-baud", rtu_baud, "baud rate of --modbus-rtu")->check(CLI::PositiveNumber);
   app.add_flag("--print-modbus-map", print_map, "print the register map as Markdown and exit");
   CLI11_PARSE(app, argc, argv);
   if (print_map) {
@@ -56,7 +60,13 @@ int main(int argc, char** argv) {
     if (time_scale >= 0) block["time_scale"] = time_scale;
     const cmm::sim::SimConfig config = cmm::sim::sim_config_from_json(block, base_dir);
     cmm::sim::SimulatedMachine machine(config);
-    cmm::sim::ModbusServer modbus(machine, config.faults, host, port);
+    cmm::sim::ModbusServer modbus(machine, config.faults, cmm::sim::ModbusTcpEndpoint{host, port});
+    std::unique_ptr<cmm::sim::ModbusServer> rtu;
+    std::thread rtu_loop;
+    if (!rtu_device.empty()) {
+      rtu = std::make_unique<cmm::sim::ModbusServer>(machine, config.faults, cmm::sim::ModbusRtuEndpoint{rtu_device, rtu_baud});
+      rtu_loop = std::thread([&] { rtu->serve(); });
+    }
 
     std::signal(SIGTERM, on_signal);
     std::signal(SIGINT, on_signal);
@@ -64,13 +74,16 @@ int main(int argc, char** argv) {
     std::thread watcher([&] {
       while (!g_stop) std::this_thread::sleep_for(std::chrono::milliseconds(20));
       modbus.shutdown();
+      if (rtu) rtu->shutdown();
     });
     nlohmann::json ready = {{"ready", true}, {"modbus_tcp", modbus.port()}, {"host", host}, {"pid", getpid()},
                             {"time_scale", config.time_scale}, {"seed", config.seed}};
+    if (rtu) ready["modbus_rtu"] = rtu_device;
     std::cout << ready.dump() << std::endl;
     modbus.serve();
     g_stop = 1;
     watcher.join();
+    if (rtu_loop.joinable()) rtu_loop.join();
     return 0;
   } catch (const cmm::hal::ConfigError& e) {
     std::cerr << "cmm-sim: " << e.what() << "\n";

@@ -39,19 +39,34 @@ Vec3 get_vec(const std::uint16_t* regs, double unit) {
 }
 }  // namespace
 
-ModbusServer::ModbusServer(SimulatedMachine& machine, const FaultInjection& faults, const std::string& host, int port)
+ModbusServer::ModbusServer(SimulatedMachine& machine, const FaultInjection& faults, const ModbusTcpEndpoint& endpoint)
     : machine_(machine), faults_(faults) {
-  ctx_ = modbus_new_tcp(host.c_str(), port);
+  ctx_ = modbus_new_tcp(endpoint.host.c_str(), endpoint.port);
   map_ = modbus_mapping_new(0, 0, mb::kRegisterSpace, 0);
   if (!ctx_ || !map_) throw std::runtime_error("cmm-sim: cannot create the Modbus server context");
   listen_fd_ = modbus_tcp_listen(ctx_, 8);
   if (listen_fd_ < 0)
-    throw std::runtime_error("cmm-sim: cannot listen for Modbus TCP on " + host + ":" + std::to_string(port) + ": " +
-                             modbus_strerror(errno));
+    throw std::runtime_error("cmm-sim: cannot listen for Modbus TCP on " + endpoint.host + ":" +
+                             std::to_string(endpoint.port) + ": " + modbus_strerror(errno));
   sockaddr_in address{};
   socklen_t length = sizeof address;
   getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&address), &length);
   port_ = ntohs(address.sin_port);
+  start();
+}
+
+ModbusServer::ModbusServer(SimulatedMachine& machine, const FaultInjection& faults, const ModbusRtuEndpoint& endpoint)
+    : machine_(machine), faults_(faults), rtu_(true) {
+  ctx_ = modbus_new_rtu(endpoint.device.c_str(), endpoint.baud, 'N', 8, 1);
+  map_ = modbus_mapping_new(0, 0, mb::kRegisterSpace, 0);
+  if (!ctx_ || !map_) throw std::runtime_error("cmm-sim: cannot create a Modbus RTU context for " + endpoint.device);
+  modbus_set_slave(ctx_, 1);
+  if (modbus_connect(ctx_) < 0)
+    throw std::runtime_error("cmm-sim: cannot open " + endpoint.device + " for Modbus RTU: " + modbus_strerror(errno));
+  start();
+}
+
+void ModbusServer::start() {
   last_heartbeat_ = std::chrono::steady_clock::now();
   worker_ = std::thread([this] { worker_loop(); });
 }
@@ -66,6 +81,7 @@ ModbusServer::~ModbusServer() {
   if (worker_.joinable()) worker_.join();
   drop_clients();
   if (listen_fd_ >= 0) close(listen_fd_);
+  if (rtu_) modbus_close(ctx_);
   modbus_mapping_free(map_);
   modbus_free(ctx_);
 }
@@ -77,8 +93,30 @@ void ModbusServer::drop_clients() {
   clients_.clear();
 }
 
+void ModbusServer::serve_rtu(std::uint8_t* query) {
+  const int fd = modbus_get_socket(ctx_);
+  while (running_) {
+    fd_set readable;
+    FD_ZERO(&readable);
+    FD_SET(fd, &readable);
+    timeval tick{0, 5000};
+    if (select(fd + 1, &readable, nullptr, nullptr, &tick) < 0 && errno != EINTR)
+      throw std::runtime_error(std::string("cmm-sim: select: ") + std::strerror(errno));
+    watch_heartbeat();
+    if (!FD_ISSET(fd, &readable)) continue;
+    const int length = modbus_receive(ctx_, query);
+    if (length < 0) {
+      modbus_flush(ctx_);  // a garbled frame: the client times out and retries
+    } else if (length > 0 && !silent_) {
+      handle(fd, query, length);
+    }
+  }
+}
+
 void ModbusServer::serve() {
-  std::vector<std::uint8_t> query(MODBUS_TCP_MAX_ADU_LENGTH);
+  std::vector<std::uint8_t> query(MODBUS_TCP_MAX_ADU_LENGTH > MODBUS_RTU_MAX_ADU_LENGTH ? MODBUS_TCP_MAX_ADU_LENGTH
+                                                                                         : MODBUS_RTU_MAX_ADU_LENGTH);
+  if (rtu_) return serve_rtu(query.data());
   while (running_) {
     fd_set readable;
     FD_ZERO(&readable);
@@ -135,16 +173,23 @@ void ModbusServer::handle(int fd, const std::uint8_t* query, int length) {
     if (faults_.drop_link_after_commands > 0 && commands_ > faults_.drop_link_after_commands && !dropped_) {
       dropped_ = true;  // once: the link may come back, as a cable put back in does
       drop_clients();
+      silent_ = rtu_;  // a serial line has no connection to close: it just goes quiet
       return;
     }
     if (commands_ == faults_.corrupt_reply_at_command) {
-      // The reply's transaction id does not match the request's: a frame damaged on the way.
+      // A frame damaged on the way: over TCP the transaction id does not match the request's,
+      // over RTU the CRC is wrong.
       std::uint8_t reply[12];
-      std::memcpy(reply, query, 8);
-      reply[1] ^= 0x5a;
-      reply[5] = 6;
-      std::memcpy(reply + 8, query + offset + 1, 4);
-      if (::write(fd, reply, sizeof reply) < 0) { /* the client is gone; the loop notices */ }
+      std::memcpy(reply, query, static_cast<std::size_t>(offset + 1));
+      std::memcpy(reply + offset + 1, query + offset + 1, 4);
+      std::size_t size = static_cast<std::size_t>(offset) + 5;
+      if (rtu_) {
+        reply[size++] = 0xde, reply[size++] = 0xad;
+      } else {
+        reply[1] ^= 0x5a;
+        reply[5] = 6;
+      }
+      if (::write(fd, reply, size) < 0) { /* the client is gone; the loop notices */ }
       return;
     }
     if (faults_.reply_delay_s > 0)

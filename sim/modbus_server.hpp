@@ -19,11 +19,22 @@
 
 namespace cmm::sim {
 
+// Where the server answers: Modbus TCP on an address, or Modbus RTU (unit 1, 8N1) on a serial device.
+struct ModbusTcpEndpoint {
+  std::string host = "127.0.0.1";
+  int port = 0;  // 0: any free port
+};
+struct ModbusRtuEndpoint {
+  std::string device;
+  int baud = 115200;
+};
+
 class ModbusServer {
  public:
-  // Listens on host:port at once (port 0: any free port; port() tells which). Throws
-  // std::runtime_error naming the address when it cannot.
-  ModbusServer(SimulatedMachine& machine, const FaultInjection& faults, const std::string& host, int port);
+  // Listens (TCP) or opens the device (RTU) at once; port() tells a TCP port chosen by the system.
+  // Throws std::runtime_error naming the address or device when it cannot.
+  ModbusServer(SimulatedMachine& machine, const FaultInjection& faults, const ModbusTcpEndpoint& endpoint);
+  ModbusServer(SimulatedMachine& machine, const FaultInjection& faults, const ModbusRtuEndpoint& endpoint);
   ~ModbusServer();
   ModbusServer(const ModbusServer&) = delete;
   ModbusServer& operator=(const ModbusServer&) = delete;
@@ -41,14 +52,18 @@ class ModbusServer {
   void refresh();  // machine state into the registers, before every reply
   void execute(const Command& command);
   void worker_loop();
+  void start();
   void drop_clients();
+  void serve_rtu(std::uint8_t* query);
   void watch_heartbeat();
 
   SimulatedMachine& machine_;
   FaultInjection faults_;
   modbus_t* ctx_ = nullptr;
   modbus_mapping_t* map_ = nullptr;
-  int listen_fd_ = -1;
+  int listen_fd_ = -1;  // TCP
+  bool rtu_ = false;
+  bool silent_ = false;  // RTU after a dropped link: a pulled cable answers nothing
   int port_ = 0;
   std::vector<int> clients_;
   std::atomic<bool> running_{true};
