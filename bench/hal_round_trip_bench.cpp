@@ -5,7 +5,13 @@
 
 #include <modbus/modbus.h>
 
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <memory>
+#include <string>
 #include <thread>
 
 #include "hal/modbus_cmm.hpp"
@@ -83,6 +89,40 @@ void bm_modbus_move(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 
+// A serial line's transport alone: a pty pair whose far end answers each '?' with a status-report
+// sized line at once, the least a Grbl status round trip can cost.
+void bm_pty_bare_echo(benchmark::State& state) {
+  int master = -1, slave = -1;
+  if (openpty(&master, &slave, nullptr, nullptr, nullptr) != 0) return state.SkipWithError("openpty");
+  termios raw{};
+  tcgetattr(slave, &raw);
+  cfmakeraw(&raw);
+  tcsetattr(slave, TCSANOW, &raw);
+  std::atomic<bool> done{false};
+  std::thread far_end([&] {
+    const std::string report = "<Idle|MPos:278.000000,353.000000,60.000000|FS:0,0>\r\n";
+    char c;
+    while (!done && ::read(slave, &c, 1) == 1)
+      if (c == '?' && ::write(slave, report.data(), report.size()) < 0) return;
+  });
+  char line[256];
+  for (auto _ : state) {
+    if (::write(master, "?", 1) != 1) return state.SkipWithError("write");
+    std::size_t got = 0;
+    while (got == 0 || line[got - 1] != '\n') {
+      const ssize_t n = ::read(master, line + got, sizeof line - got);
+      if (n <= 0) return state.SkipWithError("read");
+      got += static_cast<std::size_t>(n);
+    }
+  }
+  state.SetItemsProcessed(state.iterations());
+  done = true;
+  if (::write(master, "x", 1) < 0) {}
+  far_end.join();
+  close(master);
+  close(slave);
+}
+
 // The in-process simulator, for scale: no transport at all.
 void bm_in_process_status(benchmark::State& state) {
   sim::SimulatedCmm cmm;
@@ -96,6 +136,7 @@ BENCHMARK(bm_modbus_bare_read)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_modbus_status)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_modbus_bare_command)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_modbus_move)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_pty_bare_echo)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_in_process_status)->UseRealTime()->MinTime(0.5);
 
 }  // namespace
