@@ -1,10 +1,12 @@
-// cmm-sim: one simulated CMM served for hardware-in-the-loop runs: Modbus TCP on loopback (and,
-// as they land, a Grbl serial pty). Prints one JSON ready line on stdout, then serves until SIGTERM.
+// cmm-sim: one simulated CMM served for hardware-in-the-loop runs: Modbus TCP on loopback and, on
+// request, Grbl 1.1 on a serial pty or device. Prints one JSON ready line on stdout, then serves
+// until SIGTERM.
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <thread>
 
 #include <CLI/CLI.hpp>
@@ -12,6 +14,7 @@
 
 #include "hal/config_block.hpp"
 #include "hal/modbus_map.hpp"
+#include "sim/grbl_server.hpp"
 #include "sim/modbus_server.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/simulated_machine.hpp"
@@ -26,13 +29,16 @@ int main(int argc, char** argv) {
   std::string config_file, host = "127.0.0.1";
   int port = 0;
   double time_scale = -1;
-  bool print_map = false;
+  bool print_map = false, grbl_pty = false;
+  std::string grbl_device;
   app.add_option("--config", config_file, "simulator config JSON (docs/hal.md); default: the built-in machine")
       ->check(CLI::ExistingFile);
   app.add_option("--host", host, "address to listen on (loopback unless you mean otherwise)");
   app.add_option("--port", port, "Modbus TCP port; 0 picks a free one (see the ready line)")->check(CLI::Range(0, 65535));
   app.add_option("--time-scale", time_scale, "run motion in wall time / this; 0 = no wall time (overrides the config)")
       ->check(CLI::NonNegativeNumber);
+  app.add_flag("--grbl-pty", grbl_pty, "also serve Grbl 1.1 on a new pty (its path: grbl_pty in the ready line)");
+  app.add_option("--grbl-device", grbl_device, "also serve Grbl 1.1 on this serial device (a socat pty, a UART)");
   app.add_flag("--print-modbus-map", print_map, "print the register map as Markdown and exit");
   CLI11_PARSE(app, argc, argv);
   if (print_map) {
@@ -57,6 +63,10 @@ int main(int argc, char** argv) {
     const cmm::sim::SimConfig config = cmm::sim::sim_config_from_json(block, base_dir);
     cmm::sim::SimulatedMachine machine(config);
     cmm::sim::ModbusServer modbus(machine, config.faults, host, port);
+    std::unique_ptr<cmm::sim::GrblServer> grbl;
+    if (grbl_pty || !grbl_device.empty()) grbl = std::make_unique<cmm::sim::GrblServer>(machine, config.faults, grbl_device);
+    std::thread grbl_thread;
+    if (grbl) grbl_thread = std::thread([&] { grbl->serve(); });
 
     std::signal(SIGTERM, on_signal);
     std::signal(SIGINT, on_signal);
@@ -64,13 +74,16 @@ int main(int argc, char** argv) {
     std::thread watcher([&] {
       while (!g_stop) std::this_thread::sleep_for(std::chrono::milliseconds(20));
       modbus.shutdown();
+      if (grbl) grbl->shutdown();
     });
     nlohmann::json ready = {{"ready", true}, {"modbus_tcp", modbus.port()}, {"host", host}, {"pid", getpid()},
                             {"time_scale", config.time_scale}, {"seed", config.seed}};
+    if (grbl) ready["grbl_pty"] = grbl->slave_path();
     std::cout << ready.dump() << std::endl;
     modbus.serve();
     g_stop = 1;
     watcher.join();
+    if (grbl_thread.joinable()) grbl_thread.join();
     return 0;
   } catch (const cmm::hal::ConfigError& e) {
     std::cerr << "cmm-sim: " << e.what() << "\n";
