@@ -2,6 +2,7 @@
 #include "hal/grbl_protocol.hpp"
 
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <vector>
 
@@ -50,7 +51,8 @@ std::optional<int> code_after(const std::string& line, const std::string& prefix
 
 std::string format_number(double value) {
   char text[48];
-  std::snprintf(text, sizeof text, "%.6f", value == 0 ? 0.0 : value);  // never "-0.000000"
+  const double nm = std::round(value * 1e6);
+  std::snprintf(text, sizeof text, "%.6f", nm == 0 ? 0.0 : value);  // never "-0.000000"
   return text;
 }
 

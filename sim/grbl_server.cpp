@@ -137,7 +137,8 @@ void GrblServer::serve() {
         fd_ = -1;
       }
       if (device_.empty()) continue;  // our own pty is gone for good: its path died with it
-      for (int i = 0; i < 15 && running_; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      // Down for 1 s, longer than a driver's status timeout: it sees the link gone, then reconnects.
+      for (int i = 0; i < 50 && running_; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
       std::lock_guard lock(write_mutex_);
       open_line();  // the cable is back
       continue;
