@@ -128,6 +128,18 @@ ConfigBlock ConfigBlock::object(const std::string& key) {
   return ConfigBlock(v ? *v : nlohmann::json(), path(key), problems_);
 }
 
+std::vector<ConfigBlock> ConfigBlock::objects(const std::string& key) {
+  std::vector<ConfigBlock> out;
+  const auto* v = find(key);
+  if (!v) return out;
+  if (!v->is_array()) {
+    problem(key, "must be an array of objects, not " + v->dump());
+    return out;
+  }
+  for (std::size_t i = 0; i < v->size(); ++i) out.emplace_back((*v)[i], path(key) + "/" + std::to_string(i), problems_);
+  return out;
+}
+
 void ConfigBlock::finish() {
   for (const auto& [key, value] : object_.items())
     if (!read_.count(key)) problem(key, "unknown key");

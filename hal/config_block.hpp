@@ -40,6 +40,8 @@ class ConfigBlock {
   std::string text(const std::string& key, const std::string& fallback, const std::set<std::string>& allowed = {});
   Vec3 vec3(const std::string& key, const Vec3& fallback);
   ConfigBlock object(const std::string& key);  // a missing key reads as an empty block
+  // An array of objects, one block per element ("/tips/0"); a missing key reads as empty.
+  std::vector<ConfigBlock> objects(const std::string& key);
   const nlohmann::json* raw(const std::string& key);  // for a value read elsewhere; marks it known
 
   void problem(const std::string& key, const std::string& message);

@@ -1,10 +1,12 @@
-// cmm-sim: one simulated CMM served for hardware-in-the-loop runs: Modbus TCP on loopback (and,
-// as they land, a Grbl serial pty). Prints one JSON ready line on stdout, then serves until SIGTERM.
+// cmm-sim: one simulated CMM served for hardware-in-the-loop runs: Modbus TCP on loopback and, on
+// request, Grbl 1.1 on a serial pty or device. Prints one JSON ready line on stdout, then serves
+// until SIGTERM.
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <thread>
 
 #include <CLI/CLI.hpp>
@@ -12,6 +14,7 @@
 
 #include "hal/config_block.hpp"
 #include "hal/modbus_map.hpp"
+#include "sim/grbl_server.hpp"
 #include "sim/modbus_server.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/simulated_machine.hpp"
@@ -22,12 +25,12 @@ void on_signal(int) { g_stop = 1; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"cmm-sim: a simulated CMM served over Modbus TCP for hardware-in-the-loop tests"};
+  CLI::App app{"cmm-sim: a simulated CMM served over Modbus TCP (and RTU, and Grbl 1.1 on a serial line) for hardware-in-the-loop tests"};
   std::string config_file, host = "127.0.0.1";
   int port = 0;
   double time_scale = -1;
-  bool print_map = false;
-  std::string rtu_device;
+  bool print_map = false, grbl_pty = false;
+  std::string rtu_device, grbl_device;
   int rtu_baud = 115200;
   app.add_option("--config", config_file, "simulator config JSON (docs/hal.md); default: the built-in machine")
       ->check(CLI::ExistingFile);
@@ -37,6 +40,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--modbus-rtu", rtu_device, "also serve Modbus RTU (unit 1, 8N1) on this serial device, e.g. a socat pty");
   app.add_option("--modbus-rtu-baud", rtu_baud, "baud rate of --modbus-rtu")->check(CLI::PositiveNumber);
+  app.add_flag("--grbl-pty", grbl_pty, "also serve Grbl 1.1 on a new pty (its path: grbl_pty in the ready line)");
+  app.add_option("--grbl-device", grbl_device, "also serve Grbl 1.1 on this serial device (a socat pty, a UART)");
   app.add_flag("--print-modbus-map", print_map, "print the register map as Markdown and exit");
   CLI11_PARSE(app, argc, argv);
   if (print_map) {
@@ -67,6 +72,10 @@ int main(int argc, char** argv) {
       rtu = std::make_unique<cmm::sim::ModbusServer>(machine, config.faults, cmm::sim::ModbusRtuEndpoint{rtu_device, rtu_baud});
       rtu_loop = std::thread([&] { rtu->serve(); });
     }
+    std::unique_ptr<cmm::sim::GrblServer> grbl;
+    if (grbl_pty || !grbl_device.empty()) grbl = std::make_unique<cmm::sim::GrblServer>(machine, config.faults, grbl_device);
+    std::thread grbl_thread;
+    if (grbl) grbl_thread = std::thread([&] { grbl->serve(); });
 
     std::signal(SIGTERM, on_signal);
     std::signal(SIGINT, on_signal);
@@ -75,15 +84,18 @@ int main(int argc, char** argv) {
       while (!g_stop) std::this_thread::sleep_for(std::chrono::milliseconds(20));
       modbus.shutdown();
       if (rtu) rtu->shutdown();
+      if (grbl) grbl->shutdown();
     });
     nlohmann::json ready = {{"ready", true}, {"modbus_tcp", modbus.port()}, {"host", host}, {"pid", getpid()},
                             {"time_scale", config.time_scale}, {"seed", config.seed}};
     if (rtu) ready["modbus_rtu"] = rtu_device;
+    if (grbl) ready["grbl_pty"] = grbl->slave_path();
     std::cout << ready.dump() << std::endl;
     modbus.serve();
     g_stop = 1;
     watcher.join();
     if (rtu_loop.joinable()) rtu_loop.join();
+    if (grbl_thread.joinable()) grbl_thread.join();
     return 0;
   } catch (const cmm::hal::ConfigError& e) {
     std::cerr << "cmm-sim: " << e.what() << "\n";

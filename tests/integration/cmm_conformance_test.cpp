@@ -13,6 +13,7 @@
 
 #include "child_process.hpp"
 #include "hal/cmm.hpp"
+#include "hal/grbl_cmm.hpp"
 #include "hal/modbus_cmm.hpp"
 #include "hal/qualification.hpp"
 #include "sim/simulated_cmm.hpp"
@@ -67,6 +68,53 @@ struct ModbusPath {
   std::unique_ptr<hal::ModbusCmm> cmm;
 };
 
+// Grbl 1.1 on a serial line: socat makes a pty pair, cmm-sim serves one end, the driver opens the
+// other. Grbl knows no tips, travel box or sphere, so the driver's config carries the machine's.
+struct GrblPath {
+  static std::string name() { return "Grbl"; }
+  hal::Cmm& open(const nlohmann::json& config) {
+    cmm.reset();
+    sim.reset();
+    socat.reset();
+    const auto dir = std::filesystem::path(::testing::TempDir()) / ("cmm-grbl-" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir);
+    const auto a = dir / "a", b = dir / "b";
+    std::filesystem::remove(a), std::filesystem::remove(b);
+    socat = std::make_unique<testing::ChildProcess>(std::vector<std::string>{
+        "/usr/bin/socat", "pty,raw,echo=0,link=" + a.string(), "pty,raw,echo=0,link=" + b.string()});
+    const auto deadline = Clock::now() + std::chrono::seconds(10);
+    while (!(std::filesystem::exists(a) && std::filesystem::exists(b)) && Clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    const auto file = dir / "sim.json";
+    std::ofstream(file) << config.dump();
+    sim = std::make_unique<testing::ChildProcess>(std::vector<std::string>{
+        CMMD_BINARY_DIR "/sim/cmm-sim", "--config", file.string(), "--port", "0", "--grbl-device", a.string()});
+    const auto ready = nlohmann::json::parse(sim->read_line(60));
+    if (!ready.value("ready", false)) throw std::runtime_error("cmm-sim did not come up");
+    const auto machine = sim::sim_config_from_json(config, CMMD_SOURCE_DIR).machine;
+    nlohmann::json tips = nlohmann::json::array();
+    for (const auto& t : machine.tips)
+      tips.push_back({{"id", t.id}, {"ball_radius_mm", t.ball_radius_mm}, {"offset", {t.offset.x(), t.offset.y(), t.offset.z()}}});
+    auto v = [](const Vec3& p) { return nlohmann::json{p.x(), p.y(), p.z()}; };
+    cmm = std::make_unique<hal::GrblCmm>();
+    cmm->configure({{"driver", "grbl"}, {"device", b.string()}, {"reset_on_open", false},
+                    {"response_timeout_s", config.value("timeout_s", 5.0)}, {"status_timeout_s", 0.5},
+                    {"poll_interval_s", 0.002},
+                    {"travel_box", {{"min", v(machine.travel_box.min)}, {"max", v(machine.travel_box.max)}}},
+                    {"max_speed_mm_s", machine.max_speed_mm_s}, {"max_accel_mm_s2", machine.max_accel_mm_s2},
+                    {"probe_speed_mm_s", machine.probe_speed_mm_s}, {"tips", tips}, {"active_tip", machine.active_tip},
+                    {"reference_sphere", {{"centre", v(machine.reference_sphere.centre)},
+                                          {"radius_mm", machine.reference_sphere.radius_mm}}}});
+    cmm->connect();
+    cmm->enable();
+    return *cmm;
+  }
+  // Destroyed in this order: the driver, then the simulator, then the line between them.
+  std::unique_ptr<testing::ChildProcess> socat;
+  std::unique_ptr<testing::ChildProcess> sim;
+  std::unique_ptr<hal::GrblCmm> cmm;
+};
+
 // Touches per path from SameSeedSameTouchesOnEveryPath, compared across paths at the end.
 std::map<std::string, std::vector<Vec3>>& touches_by_path() {
   static std::map<std::string, std::vector<Vec3>> touches;
@@ -112,7 +160,7 @@ class CmmConformance : public ::testing::Test {
   std::unique_ptr<sim::SimulatedMachine> truth_;
 };
 
-using Paths = ::testing::Types<InProcessPath, ModbusPath>;
+using Paths = ::testing::Types<InProcessPath, ModbusPath, GrblPath>;
 class PathNames {
  public:
   template <class T>

@@ -1,0 +1,584 @@
+// The Grbl driver: an Asio serial port read by its own thread (status reports to status(), every
+// other line to the one line in flight), real-time bytes from any thread, typed faults from
+// error:N / ALARM:N, and the machine description kept on this side of the line.
+#include "hal/grbl_cmm.hpp"
+
+#include <sys/ioctl.h>
+
+#include <array>
+#include <chrono>
+#include <future>
+#include <cmath>
+#include <thread>
+
+#include <asio.hpp>
+
+#include "hal/config_block.hpp"
+
+namespace cmm::hal {
+
+using Clock = std::chrono::steady_clock;
+namespace {
+std::chrono::duration<double> seconds(double s) { return std::chrono::duration<double>(s); }
+std::string text(const Vec3& p) { return "(" + grbl::format_coords(p) + ")"; }
+}  // namespace
+
+GrblSettings grbl_settings_from_json(const nlohmann::json& j) {
+  ConfigBlock b(j);
+  GrblSettings s;
+  b.text("driver", "grbl", {"grbl"});
+  s.device = b.text("device", s.device);
+  if (s.device.empty()) b.problem("device", "the serial device is required");
+  s.baud = b.integer("baud", s.baud, 1200, 4000000);
+  s.reset_on_open = b.flag("reset_on_open", s.reset_on_open);
+  s.reset_wait_s = b.number("reset_wait_s", s.reset_wait_s, 0, 60);
+  s.response_timeout_s = b.number("response_timeout_s", s.response_timeout_s, 0.01, 60);
+  s.status_timeout_s = b.number("status_timeout_s", s.status_timeout_s, 0.01, 60);
+  s.motion_timeout_s = b.number("motion_timeout_s", s.motion_timeout_s, 0.1, 86400);
+  s.poll_interval_s = b.number("poll_interval_s", s.poll_interval_s, 0.0001, 1);
+  s.connect_attempts = b.integer("connect_attempts", s.connect_attempts, 1, 100);
+  s.connect_backoff_s = b.number("connect_backoff_s", s.connect_backoff_s, 0, 60);
+  ConfigBlock box = b.object("travel_box");
+  s.travel_box.min = box.vec3("min", s.travel_box.min);
+  s.travel_box.max = box.vec3("max", s.travel_box.max);
+  box.finish();
+  if (!(s.travel_box.max.array() > s.travel_box.min.array()).all()) b.problem("travel_box", "max must exceed min on every axis");
+  s.max_speed_mm_s = b.number("max_speed_mm_s", s.max_speed_mm_s, 1e-3, 1e5);
+  s.max_accel_mm_s2 = b.number("max_accel_mm_s2", s.max_accel_mm_s2, 1e-3, 1e6);
+  s.probe_speed_mm_s = b.number("probe_speed_mm_s", s.probe_speed_mm_s, 1e-3, 1e4);
+  for (ConfigBlock& t : b.objects("tips")) {
+    TipInfo tip;
+    tip.id = t.text("id", "");
+    if (tip.id.empty()) t.problem("id", "a tip needs an id");
+    tip.ball_radius_mm = t.number("ball_radius_mm", tip.ball_radius_mm, 1e-3, 100);
+    tip.offset = t.vec3("offset", tip.offset);
+    t.finish();
+    s.tips.push_back(tip);
+  }
+  if (s.tips.empty()) b.problem("tips", "at least one tip is required");
+  s.active_tip = b.text("active_tip", s.tips.empty() ? "" : s.tips.front().id);
+  bool known = false;
+  for (const auto& t : s.tips) known = known || t.id == s.active_tip;
+  if (!s.tips.empty() && !known) b.problem("active_tip", "no tip \"" + s.active_tip + "\" in tips");
+  ConfigBlock sphere = b.object("reference_sphere");
+  s.reference_sphere.centre = sphere.vec3("centre", s.reference_sphere.centre);
+  s.reference_sphere.radius_mm = sphere.number("radius_mm", s.reference_sphere.radius_mm, 0, 1000);
+  sphere.finish();
+  b.finish();
+  b.throw_if_problems("grbl driver config");
+  return s;
+}
+
+struct GrblCmm::Port {
+  asio::io_context io;
+  asio::serial_port port{io};
+  std::thread thread;
+  std::array<char, 512> buffer{};
+  std::string partial;
+};
+
+GrblCmm::GrblCmm() = default;
+GrblCmm::~GrblCmm() { disconnect(); }
+
+void GrblCmm::require(Lifecycle at_least, const char* what) const {
+  if (lifecycle_.load() < at_least)
+    throw StateError(std::string(what) + ": the Grbl machine is " + to_string(lifecycle_.load()) + ", needs " +
+                     to_string(at_least));
+}
+
+void GrblCmm::configure(const nlohmann::json& block) {
+  if (lifecycle_ >= Lifecycle::connected) throw StateError("configure: disconnect first");
+  settings_ = grbl_settings_from_json(block);
+  active_ = 0;
+  for (std::size_t i = 0; i < settings_.tips.size(); ++i)
+    if (settings_.tips[i].id == settings_.active_tip) active_ = i;
+  lifecycle_ = Lifecycle::configured;
+}
+
+const TipInfo& GrblCmm::active() const { return settings_.tips.at(active_); }
+
+void GrblCmm::on_line(const std::string& line) {
+  std::lock_guard lock(mutex_);
+  if (auto status = grbl::parse_status(line)) {
+    last_status_ = status;
+    ++status_seq_;
+  } else if (!line.empty()) {
+    replies_.push_back(line);
+  }
+  wake_.notify_all();
+}
+
+void GrblCmm::on_link_down() {
+  std::lock_guard lock(mutex_);
+  link_down_ = true;
+  wake_.notify_all();
+}
+
+void GrblCmm::close_port() {
+  if (!port_) return;
+  asio::post(port_->io, [p = port_.get()] {
+    asio::error_code ignored;
+    p->port.close(ignored);
+  });
+  port_->io.stop();
+  if (port_->thread.joinable()) port_->thread.join();
+  port_.reset();
+}
+
+void GrblCmm::connect() {
+  require(Lifecycle::configured, "connect");
+  if (lifecycle_ >= Lifecycle::connected) return;
+  close_port();
+  double backoff = settings_.connect_backoff_s;
+  std::string error;
+  for (int attempt = 0; attempt < settings_.connect_attempts; ++attempt) {
+    if (attempt > 0) std::this_thread::sleep_for(seconds(backoff)), backoff *= 2;
+    {
+      std::lock_guard lock(mutex_);
+      replies_.clear();
+      last_status_.reset();
+      link_down_ = false;
+      in_flight_bytes_ = 0;
+    }
+    auto port = std::make_unique<Port>();
+    asio::error_code ec;
+    port->port.open(settings_.device, ec);
+    if (ec) {
+      error = ec.message();
+      continue;
+    }
+    using sp = asio::serial_port_base;
+    port->port.set_option(sp::baud_rate(static_cast<unsigned>(settings_.baud)), ec);
+    port->port.set_option(sp::character_size(8), ec);
+    port->port.set_option(sp::parity(sp::parity::none), ec);
+    port->port.set_option(sp::stop_bits(sp::stop_bits::one), ec);
+    port->port.set_option(sp::flow_control(sp::flow_control::none), ec);  // a pty refuses some: harmless
+    if (settings_.reset_on_open) {
+      // DTR low then high: an Arduino-class board restarts (a pty has no modem lines and ignores it).
+      int dtr = TIOCM_DTR;
+      ioctl(port->port.native_handle(), TIOCMBIC, &dtr);
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      ioctl(port->port.native_handle(), TIOCMBIS, &dtr);
+    }
+    Port* p = port.get();
+    port_ = std::move(port);
+    struct Reader {
+      GrblCmm* self;
+      Port* p;
+      void operator()() const {
+        p->port.async_read_some(asio::buffer(p->buffer), [self = self, p = p](const asio::error_code& e, std::size_t n) {
+          if (e) return self->on_link_down();
+          for (std::size_t i = 0; i < n; ++i) {
+            const char c = p->buffer[i];
+            if (c == '\n') {
+              self->on_line(p->partial);
+              p->partial.clear();
+            } else if (c != '\r') {
+              p->partial.push_back(c);
+            }
+          }
+          Reader{self, p}();
+        });
+      }
+    };
+    Reader{this, p}();
+    p->thread = std::thread([p] { p->io.run(); });
+    lifecycle_ = Lifecycle::connected;
+    try {
+      if (settings_.reset_on_open) {
+        const auto deadline = Clock::now() + seconds(settings_.reset_wait_s);
+        std::unique_lock lock(mutex_);
+        wake_.wait_until(lock, deadline, [&] {
+          for (const auto& line : replies_)
+            if (line.rfind("Grbl ", 0) == 0) return true;
+          return link_down_;
+        });
+      }
+      const grbl::StatusReport s = query_status("connect");
+      if (s.state == "Idle") setup_modes();
+      return;
+    } catch (const Fault& f) {
+      error = f.what();
+      lifecycle_ = Lifecycle::configured;
+      close_port();
+    }
+  }
+  throw CommLost("cannot reach the Grbl machine on " + settings_.device + " after " +
+                 std::to_string(settings_.connect_attempts) + " attempts: " + error);
+}
+
+void GrblCmm::enable() {
+  require(Lifecycle::connected, "enable");
+  lifecycle_ = Lifecycle::enabled;
+}
+
+void GrblCmm::disable() {
+  if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+}
+
+void GrblCmm::disconnect() {
+  close_port();
+  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+}
+
+void GrblCmm::send(const std::string& bytes, const char* what) {
+  if (!port_ || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Grbl link is down");
+  // Every port operation runs on the reader's thread, so the port object is never shared.
+  auto done = std::make_shared<std::promise<asio::error_code>>();
+  auto result = done->get_future();
+  asio::post(port_->io, [p = port_.get(), bytes, done] {
+    asio::error_code ec;
+    asio::write(p->port, asio::buffer(bytes), ec);
+    done->set_value(ec);
+  });
+  if (result.wait_for(seconds(settings_.status_timeout_s)) != std::future_status::ready)
+    throw CommLost(std::string(what) + ": the Grbl link does not take bytes");
+  if (const asio::error_code ec = result.get()) throw CommLost(std::string(what) + ": " + ec.message());
+}
+
+grbl::StatusReport GrblCmm::query_status(const char* what) {
+  std::uint64_t seq = 0;
+  {
+    std::lock_guard lock(mutex_);
+    seq = status_seq_;
+  }
+  send(std::string(1, grbl::kStatusQuery), what);
+  std::unique_lock lock(mutex_);
+  if (!wake_.wait_for(lock, seconds(settings_.status_timeout_s), [&] { return status_seq_ > seq || link_down_; }) ||
+      link_down_) {
+    lock.unlock();
+    if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+    throw CommLost(std::string(what) + ": no status report within " + std::to_string(settings_.status_timeout_s) +
+                   " s: the Grbl link is gone");
+  }
+  return *last_status_;
+}
+
+void GrblCmm::setup_modes() {
+  // Millimetres, absolute, G54 cleared: work coordinates are machine coordinates, so G38.x targets
+  // and [PRB] reports (always machine coordinates) agree.
+  transact("G21G90G54", "setup", false);
+  transact("G10L2P1X0Y0Z0", "setup", false);
+  transact("G92.1", "setup", false);
+}
+
+GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what, bool motion) {
+  std::lock_guard line_lock(line_mutex_);
+  const std::size_t bytes = line.size() + 1;
+  if (bytes > grbl::kRxBufferBytes - 1) throw std::invalid_argument(std::string(what) + ": line too long for Grbl");
+  {
+    std::unique_lock lock(mutex_);
+    // Character counting: never more in Grbl's RX buffer than it holds.
+    wake_.wait_for(lock, seconds(settings_.response_timeout_s),
+                   [&] { return in_flight_bytes_ + bytes < grbl::kRxBufferBytes || link_down_; });
+    replies_.clear();  // anything unasked (a banner after a reset) is stale by now
+    in_flight_bytes_ += bytes;
+  }
+  struct Release {
+    GrblCmm* self;
+    std::size_t bytes;
+    ~Release() {
+      std::lock_guard lock(self->mutex_);
+      self->in_flight_bytes_ -= bytes;
+      self->wake_.notify_all();
+    }
+  } release{this, bytes};
+  stop_requested_ = false;
+  send(line + "\n", what);
+
+  LineResult result;
+  const auto sent = Clock::now();
+  auto last_query = sent;
+  // Clock::time_point{} means "not yet" (std::optional trips -Wmaybe-uninitialized here).
+  Clock::time_point unanswered{}, idle_since{};
+  std::uint64_t seen_seq = 0;
+  {
+    std::lock_guard lock(mutex_);
+    seen_seq = status_seq_;
+  }
+  for (;;) {
+    std::string reply;
+    {
+      std::unique_lock lock(mutex_);
+      wake_.wait_for(lock, seconds(settings_.poll_interval_s), [&] { return !replies_.empty() || link_down_; });
+      if (link_down_) {
+        lock.unlock();
+        lifecycle_ = Lifecycle::configured;
+        throw CommLost(std::string(what) + ": the Grbl link dropped");
+      }
+      if (!replies_.empty()) {
+        reply = replies_.front();
+        replies_.pop_front();
+      } else if (status_seq_ > seen_seq) {
+        seen_seq = status_seq_;
+        unanswered = {};
+        const std::string& state = last_status_->state;
+        if (state == "Idle" || state == "Alarm") {
+          if (idle_since == Clock::time_point{}) idle_since = Clock::now();
+        } else {
+          idle_since = {};
+        }
+      }
+    }
+    const auto now = Clock::now();
+    if (reply.empty()) {
+      if (unanswered != Clock::time_point{} && now - unanswered > seconds(settings_.status_timeout_s)) {
+        lifecycle_ = Lifecycle::configured;
+        throw CommLost(std::string(what) + ": no status report within " + std::to_string(settings_.status_timeout_s) +
+                       " s: the Grbl link is gone");
+      }
+      const double limit = motion ? settings_.motion_timeout_s : settings_.response_timeout_s;
+      const bool idle = idle_since != Clock::time_point{};
+      if ((idle && now - idle_since > seconds(settings_.response_timeout_s)) || now - sent > seconds(limit)) {
+        try {
+          send(std::string(1, grbl::kFeedHold), what);  // whatever it is doing, it should not go on unwatched
+        } catch (const Fault&) {
+        }
+        throw Timeout(std::string(what) + ": no answer to \"" + line + "\" within " +
+                      std::to_string(idle ? settings_.response_timeout_s : limit) + " s");
+      }
+      if (now - last_query >= seconds(settings_.poll_interval_s)) {
+        last_query = now;
+        if (unanswered == Clock::time_point{}) unanswered = now;
+        send(std::string(1, grbl::kStatusQuery), what);
+      }
+      continue;
+    }
+    if (reply == "ok") return result;
+    if (auto code = grbl::parse_error(reply)) {
+      FaultKind kind = grbl::fault_from_error(*code);
+      if (kind == FaultKind::not_homed && query_status(what).pins.find('R') != std::string::npos)
+        throw EStop(std::string(what) + ": the e-stop input is active (Grbl's reset pin); reset() after releasing it");
+      throw_fault(kind, std::string(what) + ": Grbl answered error:" + std::to_string(*code) + " (" +
+                            grbl::error_text(*code) + ") to \"" + line + "\"");
+    }
+    if (auto code = grbl::parse_alarm(reply)) alarm(*code, what);
+    if (auto probe = grbl::parse_probe(reply)) {
+      result.probe = probe;
+      continue;
+    }
+    if (reply.rfind("Grbl ", 0) == 0) {
+      if (stop_requested_) throw Aborted(std::string(what) + ": stopped by stop()");
+      throw Aborted(std::string(what) + ": the Grbl machine restarted during \"" + line + "\"");
+    }
+    if (reply.front() == '[') {
+      result.messages.push_back(reply);
+      continue;
+    }
+    throw Protocol(std::string(what) + ": cannot parse Grbl's answer \"" + reply + "\" to \"" + line + "\"");
+  }
+}
+
+void GrblCmm::alarm(int code, const char* what) {
+  const std::string message = std::string(what) + ": ALARM:" + std::to_string(code) + " (" + grbl::alarm_text(code) + ")";
+  if (code == grbl::kAlarmAbortCycle) {
+    if (abort_requested_) throw Aborted(message + " after abort()");
+    if (query_status(what).pins.find('R') != std::string::npos)
+      throw EStop(std::string(what) + ": the machine's e-stop input went active (Grbl's reset pin)");
+    throw Aborted(message);
+  }
+  throw_fault(grbl::fault_from_alarm(code), message);
+}
+
+template <class F>
+auto GrblCmm::motion(const char* what, F&& f) {
+  require(Lifecycle::enabled, what);
+  try {
+    if (aborted_) throw Aborted(std::string(what) + ": abort is latched; reset() first");
+    abort_requested_ = false;
+    auto result = f();
+    std::lock_guard lock(mutex_);
+    fault_.reset();
+    fault_message_.clear();
+    return result;
+  } catch (const Fault& fault) {
+    {
+      std::lock_guard lock(mutex_);
+      fault_ = fault.kind();
+      fault_message_ = fault.what();
+    }
+    if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+    throw;
+  }
+}
+
+MachineInfo GrblCmm::info() {
+  require(Lifecycle::connected, "info");
+  MachineInfo info;
+  info.driver = "grbl";
+  info.description = "Grbl 1.1 machine on " + settings_.device;
+  info.travel_box = settings_.travel_box;
+  info.max_speed_mm_s = settings_.max_speed_mm_s;
+  info.max_accel_mm_s2 = settings_.max_accel_mm_s2;
+  info.probe_speed_mm_s = settings_.probe_speed_mm_s;
+  info.tips = settings_.tips;
+  info.active_tip = active().id;
+  info.reference_sphere = settings_.reference_sphere;
+  return info;
+}
+
+MachineStatus GrblCmm::status() {
+  require(Lifecycle::connected, "status");
+  const grbl::StatusReport r = query_status("status");
+  MachineStatus s;
+  s.lifecycle = lifecycle_;
+  s.homed = r.state != "Alarm" && r.state != "Home";  // homing is enforced: an unhomed Grbl is in Alarm
+  s.moving = r.state == "Run" || r.state == "Home" || r.state == "Jog" || (r.state == "Hold" && r.substate == 1);
+  s.estop = r.pins.find('R') != std::string::npos;
+  s.aborted = aborted_;
+  s.position = r.mpos + active().offset;
+  s.tip_id = active().id;
+  s.t_s = r.clock_s.value_or(0);
+  std::lock_guard lock(mutex_);
+  s.fault = fault_;
+  s.fault_message = fault_message_;
+  return s;
+}
+
+std::optional<grbl::ProbeReport> GrblCmm::guarded(const Vec3& ball_target, double speed_mm_s, bool fail_on_miss,
+                                                  const char* what) {
+  const double feed = std::min(speed_mm_s > 0 ? speed_mm_s : settings_.max_speed_mm_s, settings_.max_speed_mm_s) * 60;
+  const std::string line = std::string(fail_on_miss ? "G38.2" : "G38.3") + "X" + grbl::format_number(mpos_of(ball_target).x()) +
+                           "Y" + grbl::format_number(mpos_of(ball_target).y()) + "Z" +
+                           grbl::format_number(mpos_of(ball_target).z()) + "F" + grbl::format_number(feed);
+  return transact(line, what, true).probe;
+}
+
+void GrblCmm::home() {
+  motion("home", [&] {
+    transact("$H", "home", true);
+    setup_modes();
+    return 0;
+  });
+}
+
+void GrblCmm::move(const Move& m) {
+  motion("move", [&] {
+    if (!settings_.travel_box.contains(m.target))
+      throw SoftLimit("move target " + text(m.target) + " is outside the travel box");
+    const Vec3 here = status().position;
+    if ((here - m.target).norm() < 1e-9) return 0;
+    // Grbl watches the probe only during G38.x: guarded travel is a G38.3 toward the target.
+    auto prb = guarded(m.target, m.speed_mm_s, false, "move");
+    if (prb && prb->success)
+      throw EarlyTrigger("the probe triggered during a guarded move at " + text(prb->position + active().offset) +
+                         " on the way to " + text(m.target));
+    return 0;
+  });
+}
+
+TouchResult GrblCmm::probe(const ProbeMove& p) {
+  return motion("probe", [&] {
+    const double length = p.direction.norm();
+    if (!p.direction.allFinite() || !(length > 0.5 && length < 2))
+      throw std::invalid_argument("probe direction must be a unit vector");
+    if (!(p.max_travel_mm > 0) || !(p.min_travel_mm >= 0) || p.min_travel_mm >= p.max_travel_mm)
+      throw std::invalid_argument("probe travel must satisfy 0 ≤ min_travel_mm < max_travel_mm");
+    const Vec3 d = p.direction / length;
+    const Vec3 end = p.start + d * p.max_travel_mm;
+    for (const auto& [point, name] : {std::pair{p.start, "probe start"}, std::pair{end, "probe end"},
+                                      std::pair{Vec3(p.start - d * std::max(0.0, p.retract_mm - p.max_travel_mm)), "probe retract"}})
+      if (!settings_.travel_box.contains(point)) throw SoftLimit(std::string(name) + " " + text(point) + " is outside the travel box");
+    if ((status().position - p.start).norm() > 1e-9) {
+      auto prb = guarded(p.start, 0, false, "probe");
+      if (prb && prb->success) throw EarlyTrigger("the probe triggered on the way to the search start " + text(p.start));
+    }
+    const double speed = p.speed_mm_s > 0 ? p.speed_mm_s : settings_.probe_speed_mm_s;
+    std::optional<grbl::ProbeReport> prb;
+    try {
+      prb = guarded(end, speed, p.fail_on_miss, "probe");
+    } catch (const NoContact&) {
+      transact("$X", "probe", false);  // a miss keeps the position: unlock so the next call works
+      throw;
+    }
+    if (!prb) throw Protocol("probe: Grbl answered ok to a G38 line without a [PRB] report");
+    const MachineStatus after = status();
+    TouchResult r;
+    r.tip_id = active().id;
+    r.centre = prb->position + active().offset;
+    r.travel_mm = (r.centre - p.start).norm();
+    r.t_s = after.t_s;
+    if (!prb->success) return r;  // G38.3 ran its whole travel
+    // Grbl has no minimum travel: the driver judges it, and never reports such a touch.
+    if (r.travel_mm < std::max(p.min_travel_mm, 1e-6))
+      throw EarlyTrigger("a trigger after " + std::to_string(r.travel_mm) + " mm, before the search's minimum travel of " +
+                         std::to_string(p.min_travel_mm) + " mm, from " + text(p.start));
+    r.contact = true;
+    if (p.retract_mm > 0) {
+      auto back = guarded(after.position - d * p.retract_mm, 0, false, "probe");
+      if (back && back->success) throw EarlyTrigger("the probe triggered while retracting from " + text(r.centre));
+    }
+    return r;
+  });
+}
+
+void GrblCmm::stop() {
+  if (lifecycle_ < Lifecycle::connected || !port_) return;
+  stop_requested_ = true;
+  send(std::string(1, grbl::kFeedHold), "stop");
+  // Feed hold brakes on the path; a soft reset once it has come to rest (Hold:0) keeps the position,
+  // and flushes the held line.
+  const auto deadline = Clock::now() + seconds(settings_.response_timeout_s + 5);
+  while (Clock::now() < deadline) {
+    const grbl::StatusReport s = query_status("stop");
+    if (s.state == "Hold" && s.substate == 0) {
+      stop_requested_ = true;
+      send(std::string(1, grbl::kSoftReset), "stop");
+      return;
+    }
+    if (s.state == "Idle" || s.state == "Alarm") return;
+    std::this_thread::sleep_for(seconds(settings_.poll_interval_s));
+  }
+  throw Timeout("stop: the Grbl machine did not come to rest");
+}
+
+void GrblCmm::abort() {
+  aborted_ = true;
+  abort_requested_ = true;
+  if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+  if (lifecycle_ < Lifecycle::connected || !port_) return;
+  send(std::string(1, grbl::kSoftReset), "abort");  // at once: a motion in progress loses the position
+}
+
+void GrblCmm::reset() {
+  require(Lifecycle::connected, "reset");
+  {
+    std::lock_guard lock(mutex_);
+    replies_.clear();
+  }
+  send(std::string(1, grbl::kSoftReset), "reset");
+  std::unique_lock lock(mutex_);
+  const bool banner = wake_.wait_for(lock, seconds(settings_.response_timeout_s), [&] {
+    for (const auto& line : replies_)
+      if (line.rfind("Grbl ", 0) == 0) return true;
+    return link_down_;
+  });
+  if (!banner || link_down_) throw Timeout("reset: no banner from the Grbl machine after a soft reset");
+  aborted_ = abort_requested_ = false;
+  fault_.reset();
+  fault_message_.clear();
+}
+
+void GrblCmm::select_tip(const std::string& tip_id) {
+  require(Lifecycle::connected, "select_tip");
+  for (std::size_t i = 0; i < settings_.tips.size(); ++i)
+    if (settings_.tips[i].id == tip_id) {
+      active_ = i;
+      return;
+    }
+  throw std::invalid_argument("no tip \"" + tip_id + "\" in the Grbl driver's config");
+}
+
+void GrblCmm::record_qualification(const std::string& tip_id, const TipQualification& q) {
+  require(Lifecycle::connected, "record_qualification");
+  for (auto& tip : settings_.tips)
+    if (tip.id == tip_id) {
+      tip.ball_radius_mm = q.ball_radius_mm;
+      tip.offset = q.offset;
+      tip.qualification = q;
+      return;
+    }
+  throw std::invalid_argument("no tip \"" + tip_id + "\" in the Grbl driver's config");
+}
+
+}  // namespace cmm::hal

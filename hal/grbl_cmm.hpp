@@ -1,0 +1,103 @@
+// hal::Cmm over a serial line speaking Grbl 1.1 (hal/grbl_protocol.hpp; docs/hal.md "Grbl 1.1
+// dialect"): guarded travel and searches as G38.3/G38.2 in machine coordinates, status by the
+// real-time `?`, stop as feed hold then soft reset, and the tips and travel box kept driver-side.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hal/cmm.hpp"
+#include "hal/grbl_protocol.hpp"
+
+namespace cmm::hal {
+
+struct GrblSettings {
+  std::string device;
+  int baud = 115200;
+  bool reset_on_open = true;       // opening the port pulses DTR, which resets an Arduino-class board
+  double reset_wait_s = 2;         // how long to wait for the banner after that reset
+  double response_timeout_s = 1;   // a non-motion line's answer; a motion's ok once the machine is idle
+  double status_timeout_s = 0.5;   // a `?` unanswered this long means the link is gone (CommLost)
+  double motion_timeout_s = 600;   // one motion line, from sending it to its ok
+  double poll_interval_s = 0.01;   // `?` while a motion runs
+  int connect_attempts = 4;
+  double connect_backoff_s = 0.05;  // doubled after each failed attempt
+  // What Grbl does not know: the machine's description (machine.json's schema, in part).
+  TravelBox travel_box;
+  double max_speed_mm_s = 100, max_accel_mm_s2 = 500, probe_speed_mm_s = 5;
+  std::vector<TipInfo> tips;
+  std::string active_tip;
+  ReferenceSphereInfo reference_sphere;
+};
+
+GrblSettings grbl_settings_from_json(const nlohmann::json& block);  // throws ConfigError
+
+class GrblCmm : public Cmm {
+ public:
+  GrblCmm();
+  ~GrblCmm() override;
+
+  void configure(const nlohmann::json& block) override;
+  void connect() override;
+  void enable() override;
+  void disable() override;
+  void disconnect() override;
+  MachineInfo info() override;
+  MachineStatus status() override;
+  void home() override;
+  void move(const Move& move) override;
+  TouchResult probe(const ProbeMove& move) override;
+  void stop() override;
+  void abort() override;
+  void reset() override;
+  void select_tip(const std::string& tip_id) override;
+  void record_qualification(const std::string& tip_id, const TipQualification& q) override;
+
+ private:
+  struct Port;  // the Asio serial port and its reader thread
+  struct LineResult {
+    std::vector<std::string> messages;  // [PRB:…], [MSG:…] before the ok
+    std::optional<grbl::ProbeReport> probe;
+  };
+  void require(Lifecycle at_least, const char* what) const;
+  template <class F>
+  auto motion(const char* what, F&& f);
+  void send(const std::string& bytes, const char* what);
+  void on_line(const std::string& line);
+  void on_link_down();
+  grbl::StatusReport query_status(const char* what);
+  // Sends one line (counting into Grbl's RX buffer) and waits for its ok; error:N and ALARM:N throw.
+  LineResult transact(const std::string& line, const char* what, bool motion);
+  [[noreturn]] void alarm(int code, const char* what);
+  void setup_modes();
+  const TipInfo& active() const;
+  Vec3 mpos_of(const Vec3& ball) const { return ball - active().offset; }
+  std::optional<grbl::ProbeReport> guarded(const Vec3& ball_target, double speed_mm_s, bool fail_on_miss, const char* what);
+  void close_port();
+
+  GrblSettings settings_;
+  std::atomic<Lifecycle> lifecycle_{Lifecycle::unconfigured};
+  std::unique_ptr<Port> port_;
+  std::mutex line_mutex_;  // one line in flight at a time
+
+  mutable std::mutex mutex_;  // what the reader thread hands over
+  std::condition_variable wake_;
+  std::deque<std::string> replies_;
+  std::optional<grbl::StatusReport> last_status_;
+  std::uint64_t status_seq_ = 0;
+  bool link_down_ = false;
+  std::size_t in_flight_bytes_ = 0;
+
+  std::atomic<bool> stop_requested_{false}, abort_requested_{false}, aborted_{false};
+  std::optional<FaultKind> fault_;
+  std::string fault_message_;
+  std::size_t active_ = 0;
+};
+
+}  // namespace cmm::hal
