@@ -1,10 +1,11 @@
 // HAL round trips per second on each path against its bare transport, in one run: the driver's own
 // overhead (encoding, the sequence echo, lifecycle checks) should be small beside the transport's.
-// The Modbus server is cmm-sim's own, run in this process on loopback TCP.
+// The servers are cmm-sim's own, run in this process: Modbus on loopback TCP, Grbl on a pty.
 #include <benchmark/benchmark.h>
 
 #include <modbus/modbus.h>
 
+#include <fcntl.h>
 #include <pty.h>
 #include <termios.h>
 #include <unistd.h>
@@ -14,8 +15,10 @@
 #include <string>
 #include <thread>
 
+#include "hal/grbl_cmm.hpp"
 #include "hal/modbus_cmm.hpp"
 #include "hal/modbus_map.hpp"
+#include "sim/grbl_server.hpp"
 #include "sim/modbus_server.hpp"
 #include "sim/simulated_cmm.hpp"
 
@@ -123,6 +126,77 @@ void bm_pty_bare_echo(benchmark::State& state) {
   close(slave);
 }
 
+// cmm-sim's Grbl side on a pty in this process, and hal::GrblCmm on the pty's other end.
+struct GrblRig {
+  sim::SimConfig config = sim::sim_config_from_json({{"part", {{"analytic", "cube"}, {"edge_length_mm", 4}}}});
+  sim::SimulatedMachine machine{config};
+  sim::GrblServer server{machine, config.faults};
+  std::thread loop{[this] { server.serve(); }};
+  hal::GrblCmm cmm;
+  GrblRig() {
+    const auto& box = config.machine.travel_box;
+    cmm.configure({{"driver", "grbl"}, {"device", server.slave_path()}, {"reset_on_open", false},
+                   {"poll_interval_s", 0.0001},
+                   {"travel_box", {{"min", {box.min.x(), box.min.y(), box.min.z()}}, {"max", {box.max.x(), box.max.y(), box.max.z()}}}},
+                   {"tips", {{{"id", "T1"}, {"ball_radius_mm", 1.0}}}}, {"active_tip", "T1"}});
+    cmm.connect();
+    cmm.enable();
+  }
+  ~GrblRig() {
+    cmm.disconnect();
+    server.shutdown();
+    loop.join();
+  }
+};
+
+// The same server's pty read bare: write `?`, read the report line, parse nothing.
+void bm_grbl_bare_status(benchmark::State& state) {
+  sim::SimConfig config = sim::sim_config_from_json({{"part", {{"analytic", "cube"}, {"edge_length_mm", 4}}}});
+  sim::SimulatedMachine machine{config};
+  sim::GrblServer server{machine, config.faults};
+  std::thread loop{[&] { server.serve(); }};
+  const int fd = ::open(server.slave_path().c_str(), O_RDWR | O_NOCTTY);
+  termios raw{};
+  tcgetattr(fd, &raw);
+  cfmakeraw(&raw);
+  tcsetattr(fd, TCSANOW, &raw);
+  char line[512];
+  auto report = [&] {
+    if (::write(fd, "?", 1) != 1) return false;
+    std::size_t got = 0;
+    while (got == 0 || line[got - 1] != '\n') {
+      const ssize_t n = ::read(fd, line + got, sizeof line - got);
+      if (n <= 0) return false;
+      got += static_cast<std::size_t>(n);
+      if (line[0] != '<') got = 0;  // the banner or another line: not the report
+    }
+    return true;
+  };
+  for (auto _ : state)
+    if (!report()) return state.SkipWithError("no status report");
+  state.SetItemsProcessed(state.iterations());
+  close(fd);
+  server.shutdown();
+  loop.join();
+}
+
+// hal::GrblCmm::status(): a `?` and its status report, parsed.
+void bm_grbl_status(benchmark::State& state) {
+  GrblRig rig;
+  for (auto _ : state) benchmark::DoNotOptimize(rig.cmm.status());
+  state.SetItemsProcessed(state.iterations());
+}
+
+// hal::GrblCmm::move() there and back by 1 µm: a G38.3 line, its ok, and the status polls around it.
+void bm_grbl_move(benchmark::State& state) {
+  GrblRig rig;
+  rig.cmm.home();
+  const hal::Vec3 a = rig.cmm.status().position, b = a - hal::Vec3(0, 0, 0.001);
+  bool there = false;
+  for (auto _ : state) rig.cmm.move({(there = !there) ? b : a, 0});
+  state.SetItemsProcessed(state.iterations());
+}
+
 // The in-process simulator, for scale: no transport at all.
 void bm_in_process_status(benchmark::State& state) {
   sim::SimulatedCmm cmm;
@@ -137,6 +211,9 @@ BENCHMARK(bm_modbus_status)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_modbus_bare_command)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_modbus_move)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_pty_bare_echo)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_grbl_bare_status)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_grbl_status)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_grbl_move)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_in_process_status)->UseRealTime()->MinTime(0.5);
 
 }  // namespace

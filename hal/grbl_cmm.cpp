@@ -3,11 +3,14 @@
 // error:N / ALARM:N, and the machine description kept on this side of the line.
 #include "hal/grbl_cmm.hpp"
 
+#include <poll.h>
+#include <cstring>
+#include <unistd.h>
+
 #include <sys/ioctl.h>
 
 #include <array>
 #include <chrono>
-#include <future>
 #include <cmath>
 #include <thread>
 
@@ -115,6 +118,7 @@ void GrblCmm::on_link_down() {
 }
 
 void GrblCmm::close_port() {
+  std::lock_guard lock(write_mutex_);  // no write is under way on the descriptor being closed
   if (!port_) return;
   asio::post(port_->io, [p = port_.get()] {
     asio::error_code ignored;
@@ -222,18 +226,28 @@ void GrblCmm::disconnect() {
 }
 
 void GrblCmm::send(const std::string& bytes, const char* what) {
+  // Written from the calling thread straight to the descriptor, under a lock of its own. The
+  // reader's pending read is on the same descriptor, which POSIX allows; handing each write to the
+  // reader's thread and back cost as much as the round trip on the line (docs/PERFORMANCE.md).
+  std::lock_guard lock(write_mutex_);
   if (!port_ || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Grbl link is down");
-  // Every port operation runs on the reader's thread, so the port object is never shared.
-  auto done = std::make_shared<std::promise<asio::error_code>>();
-  auto result = done->get_future();
-  asio::post(port_->io, [p = port_.get(), bytes, done] {
-    asio::error_code ec;
-    asio::write(p->port, asio::buffer(bytes), ec);
-    done->set_value(ec);
-  });
-  if (result.wait_for(seconds(settings_.status_timeout_s)) != std::future_status::ready)
-    throw CommLost(std::string(what) + ": the Grbl link does not take bytes");
-  if (const asio::error_code ec = result.get()) throw CommLost(std::string(what) + ": " + ec.message());
+  const int fd = port_->port.native_handle();
+  const auto deadline = Clock::now() + seconds(settings_.status_timeout_s);
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n > 0) {
+      done += static_cast<std::size_t>(n);
+    } else if (n < 0 && errno == EINTR) {
+      continue;
+    } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+      pollfd writable{fd, POLLOUT, 0};
+      if (left <= 0 || ::poll(&writable, 1, static_cast<int>(left)) <= 0)
+        throw CommLost(std::string(what) + ": the Grbl link does not take bytes");
+    } else {
+      throw CommLost(std::string(what) + ": " + std::strerror(errno));
+    }
+  }
 }
 
 grbl::StatusReport GrblCmm::query_status(const char* what) {

@@ -85,6 +85,7 @@ class GrblCmm : public Cmm {
   std::atomic<Lifecycle> lifecycle_{Lifecycle::unconfigured};
   std::unique_ptr<Port> port_;
   std::mutex line_mutex_;  // one line in flight at a time
+  std::mutex write_mutex_;  // one writer on the descriptor; close_port() waits for it
 
   mutable std::mutex mutex_;  // what the reader thread hands over
   std::condition_variable wake_;
