@@ -297,7 +297,10 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
       self->wake_.notify_all();
     }
   } release{this, bytes};
-  stop_requested_ = false;
+  // A stop or abort that came between the lines of one call ends the call here: an idle Grbl
+  // ignores a feed hold and stays homed after a soft reset, so the next line would otherwise run.
+  if (motion && (aborted_ || stop_requested_))
+    throw Aborted(std::string(what) + (aborted_ ? ": aborted" : ": stopped by stop()") + " before the next line");
   send(line + "\n", what);
 
   LineResult result;
@@ -400,6 +403,7 @@ auto GrblCmm::motion(const char* what, F&& f) {
   try {
     if (aborted_) throw Aborted(std::string(what) + ": abort is latched; reset() first");
     abort_requested_ = false;
+    stop_requested_ = false;  // a stop of an earlier call; one during this call ends it at its next line
     auto result = f();
     std::lock_guard lock(mutex_);
     fault_.reset();
@@ -491,7 +495,7 @@ TouchResult GrblCmm::probe(const ProbeMove& p) {
     const Vec3 d = p.direction / length;
     const Vec3 end = p.start + d * p.max_travel_mm;
     for (const auto& [point, name] : {std::pair{p.start, "probe start"}, std::pair{end, "probe end"},
-                                      std::pair{Vec3(p.start - d * std::max(0.0, p.retract_mm - p.max_travel_mm)), "probe retract"}})
+                                      std::pair{Vec3(p.start - d * std::max(0.0, p.retract_mm - p.min_travel_mm)), "probe retract"}})
       if (!settings_.travel_box.contains(point)) throw SoftLimit(std::string(name) + " " + text(point) + " is outside the travel box");
     if ((status().position - p.start).norm() > 1e-9) {
       auto prb = guarded(p.start, 0, false, "probe");
@@ -541,6 +545,11 @@ void GrblCmm::stop() {
       return;
     }
     if (s.state == "Idle" || s.state == "Alarm") return;
+    if (s.state == "Home" || s.state == "Jog") {
+      // Grbl ignores a feed hold while homing: reset at once (the position was not known yet).
+      send(std::string(1, grbl::kSoftReset), "stop");
+      return;
+    }
     std::this_thread::sleep_for(seconds(settings_.poll_interval_s));
   }
   throw Timeout("stop: the Grbl machine did not come to rest");

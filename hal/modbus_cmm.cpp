@@ -111,8 +111,16 @@ void ModbusCmm::connect() {
       throw Protocol("the machine at " + where + " speaks register map version " + std::to_string(version[0]) +
                      ", this driver version " + std::to_string(mb::kProtocolVersion));
     info();  // the tip table
-    // The sequence continues from the machine's last echo, so a reconnect never repeats a number
-    // the machine has already acted on.
+    // A command from before the link dropped may still be running: its outcome is unknown, so it is
+    // stopped, never replayed, and its echo is awaited so that the next number cannot collide with it.
+    if (read(command_link(), mb::address("flags"), 1, "connect")[0] & mb::busy) {
+      write_single(command_link(), mb::address("urgent"), mb::Urgent::stop, "connect");
+      const auto deadline = Clock::now() + std::chrono::duration<double>(settings_.motion_timeout_s);
+      while (read(command_link(), mb::address("flags"), 1, "connect")[0] & mb::busy) {
+        if (Clock::now() > deadline) throw Timeout("connect: the machine's last command does not stop");
+        std::this_thread::sleep_for(std::chrono::duration<double>(std::max(settings_.poll_interval_s, 1e-3)));
+      }
+    }
     seq_ = read(command_link(), mb::address("done_seq"), 1, "connect")[0];
     if (settings_.heartbeat_s > 0) {
       write_single(command_link(), mb::address("heartbeat_timeout"),
@@ -146,9 +154,9 @@ void ModbusCmm::stop_heartbeat() {
 }
 
 void ModbusCmm::disconnect() {
+  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;  // before the contexts go
   stop_heartbeat();
   close_contexts();
-  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
 }
 
 void ModbusCmm::heartbeat_loop() {
@@ -184,10 +192,11 @@ void ModbusCmm::link_failed(const char* what, int error) {
 std::vector<std::uint16_t> ModbusCmm::read(Link link, int address, int count, const char* what) {
   std::vector<std::uint16_t> regs(static_cast<std::size_t>(count));
   std::lock_guard lock(*link.mutex);
-  if (!link.ctx || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
-  if (modbus_read_registers(link.ctx, address, count, regs.data()) != count) {
+  modbus_t* ctx = *link.ctx;
+  if (!ctx || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
+  if (modbus_read_registers(ctx, address, count, regs.data()) != count) {
     const int error = errno;  // before the flush, which sets its own
-    modbus_flush(link.ctx);
+    modbus_flush(ctx);
     link_failed(what, error);
   }
   return regs;
@@ -195,16 +204,18 @@ std::vector<std::uint16_t> ModbusCmm::read(Link link, int address, int count, co
 
 void ModbusCmm::write_single(Link link, int address, std::uint16_t value, const char* what) {
   std::lock_guard lock(*link.mutex);
-  if (!link.ctx || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
-  if (modbus_write_register(link.ctx, address, value) != 1) {
+  modbus_t* ctx = *link.ctx;
+  if (!ctx || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
+  if (modbus_write_register(ctx, address, value) != 1) {
     const int error = errno;  // before the flush, which sets its own
-    modbus_flush(link.ctx);
+    modbus_flush(ctx);
     link_failed(what, error);
   }
 }
 
 std::vector<std::uint16_t> ModbusCmm::run_command(std::vector<std::uint16_t> block, const char* what, bool motion) {
   require(motion ? Lifecycle::enabled : Lifecycle::connected, what);
+  bool echoed_fault = false;  // the machine finished the command with a fault: it is not running
   try {
     seq_ = static_cast<std::uint16_t>(seq_ % 65535 + 1);
     block[0] = seq_;
@@ -223,19 +234,25 @@ std::vector<std::uint16_t> ModbusCmm::run_command(std::vector<std::uint16_t> blo
       if (regs[mb::address("done_seq")] == seq_) {
         if (const std::uint16_t result = regs[mb::address("done_result")]) {
           const auto text = read(command_link(), mb::address("fault_text"), 64, what);
+          echoed_fault = true;
           throw_fault(mb::fault_from_code(result), mb::get_ascii(text.data(), 64));
         }
         return regs;
       }
       if (Clock::now() > deadline) {
-        stop();  // whatever it is doing, it should not go on unwatched
         throw Timeout(std::string(what) + ": no echo of command " + std::to_string(seq_) + " within " +
                       std::to_string(settings_.motion_timeout_s) + " s");
       }
       if (settings_.poll_interval_s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(settings_.poll_interval_s));
     }
-  } catch (const Fault&) {
+  } catch (const Fault& fault) {
     if (motion && lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+    // A fault of the link, not of the machine: the command may be running unwatched. Stop it if any
+    // context still reaches it (the heartbeat stops it otherwise).
+    if (motion && !echoed_fault) try {
+        stop();
+      } catch (const std::exception&) {
+      }
     throw;
   }
 }
@@ -269,6 +286,7 @@ MachineStatus ModbusCmm::decode_status(const std::vector<std::uint16_t>& r) cons
   s.position = get_vec(&r[mb::address("position_x")]);
   s.t_s = mb::get_u32(&r[mb::address("clock")]) * 1e-3;
   const std::size_t tip = r[mb::address("active_tip")];
+  std::lock_guard lock(tips_mutex_);
   s.tip_id = tip < tip_ids_.size() ? tip_ids_[tip] : "";
   return s;
 }
@@ -316,7 +334,10 @@ MachineInfo ModbusCmm::info() {
     ids.push_back(tip.id);
     info.tips.push_back(tip);
   }
-  tip_ids_ = ids;
+  {
+    std::lock_guard lock(tips_mutex_);
+    tip_ids_ = ids;
+  }
   const std::size_t active = read(aux_link(), mb::address("active_tip"), 1, "info")[0];
   info.active_tip = active < ids.size() ? ids[active] : "";
   return info;
@@ -365,6 +386,7 @@ void ModbusCmm::abort() {
 void ModbusCmm::reset() { run_command(empty_block(mb::Opcode::reset), "reset", false); }
 
 int ModbusCmm::tip_index(const std::string& id) {
+  std::lock_guard lock(tips_mutex_);
   for (std::size_t i = 0; i < tip_ids_.size(); ++i)
     if (tip_ids_[i] == id) return static_cast<int>(i);
   throw std::invalid_argument("no tip \"" + id + "\" on the Modbus machine");

@@ -60,8 +60,10 @@ class ModbusCmm : public Cmm {
   void record_qualification(const std::string& tip_id, const TipQualification& q) override;
 
  private:
+  // A context and its lock; the context is read only under the lock, so a disconnect on another
+  // thread cannot free it under a request.
   struct Link {
-    modbus_t* ctx = nullptr;
+    modbus_t** ctx = nullptr;
     std::mutex* mutex = nullptr;
   };
   modbus_t* open_context() const;
@@ -76,8 +78,8 @@ class ModbusCmm : public Cmm {
   int tip_index(const std::string& id);
   void heartbeat_loop();
   void stop_heartbeat();
-  Link command_link() { return {command_ctx_, &command_mutex_}; }
-  Link aux_link() { return {aux_ctx_ ? aux_ctx_ : command_ctx_, aux_ctx_ ? &aux_mutex_ : &command_mutex_}; }
+  Link command_link() { return {&command_ctx_, &command_mutex_}; }
+  Link aux_link() { return settings_.transport == "rtu" ? command_link() : Link{&aux_ctx_, &aux_mutex_}; }
 
   ModbusSettings settings_;
   std::atomic<Lifecycle> lifecycle_{Lifecycle::unconfigured};
@@ -85,7 +87,8 @@ class ModbusCmm : public Cmm {
   modbus_t* aux_ctx_ = nullptr;  // null on RTU
   std::mutex command_mutex_, aux_mutex_;
   std::uint16_t seq_ = 0;
-  std::vector<std::string> tip_ids_;  // the machine's tip table, read at connect
+  std::vector<std::string> tip_ids_;  // the machine's tip table, read at connect and by info()
+  mutable std::mutex tips_mutex_;     // info() writes tip_ids_ while status() may read it
   std::thread heartbeat_;
   std::mutex heartbeat_mutex_;
   std::condition_variable heartbeat_wake_;

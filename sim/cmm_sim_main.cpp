@@ -66,16 +66,26 @@ int main(int argc, char** argv) {
     const cmm::sim::SimConfig config = cmm::sim::sim_config_from_json(block, base_dir);
     cmm::sim::SimulatedMachine machine(config);
     cmm::sim::ModbusServer modbus(machine, config.faults, cmm::sim::ModbusTcpEndpoint{host, port});
+    // Every server is built before any thread starts, so a bad device fails here with a message.
     std::unique_ptr<cmm::sim::ModbusServer> rtu;
-    std::thread rtu_loop;
-    if (!rtu_device.empty()) {
+    if (!rtu_device.empty())
       rtu = std::make_unique<cmm::sim::ModbusServer>(machine, config.faults, cmm::sim::ModbusRtuEndpoint{rtu_device, rtu_baud});
-      rtu_loop = std::thread([&] { rtu->serve(); });
-    }
     std::unique_ptr<cmm::sim::GrblServer> grbl;
     if (grbl_pty || !grbl_device.empty()) grbl = std::make_unique<cmm::sim::GrblServer>(machine, config.faults, grbl_device);
-    std::thread grbl_thread;
-    if (grbl) grbl_thread = std::thread([&] { grbl->serve(); });
+    // A side that fails while serving says so and ends cmm-sim, rather than terminating it.
+    auto serving = [](auto& server, const char* side) {
+      return std::thread([&server, side] {
+        try {
+          server->serve();
+        } catch (const std::exception& e) {
+          std::cerr << "cmm-sim: " << side << ": " << e.what() << "\n";
+          g_stop = 1;
+        }
+      });
+    };
+    std::thread rtu_loop, grbl_thread;
+    if (rtu) rtu_loop = serving(rtu, "Modbus RTU");
+    if (grbl) grbl_thread = serving(grbl, "Grbl");
 
     std::signal(SIGTERM, on_signal);
     std::signal(SIGINT, on_signal);
@@ -91,12 +101,18 @@ int main(int argc, char** argv) {
     if (rtu) ready["modbus_rtu"] = rtu_device;
     if (grbl) ready["grbl_pty"] = grbl->slave_path();
     std::cout << ready.dump() << std::endl;
-    modbus.serve();
+    int status = 0;
+    try {
+      modbus.serve();
+    } catch (const std::exception& e) {
+      std::cerr << "cmm-sim: Modbus TCP: " << e.what() << "\n";
+      status = 1;
+    }
     g_stop = 1;
     watcher.join();
     if (rtu_loop.joinable()) rtu_loop.join();
     if (grbl_thread.joinable()) grbl_thread.join();
-    return 0;
+    return status;
   } catch (const cmm::hal::ConfigError& e) {
     std::cerr << "cmm-sim: " << e.what() << "\n";
     return 2;

@@ -167,6 +167,12 @@ void ModbusServer::handle(int fd, const std::uint8_t* query, int length) {
     modbus_reply_exception(ctx_, query, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
     return;
   }
+  // A command is the whole block in one request: a partial write would run with the last block's
+  // arguments.
+  if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS && address == mb::kCommandFirst && count != mb::kCommandCount) {
+    modbus_reply_exception(ctx_, query, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+    return;
+  }
   const bool command = function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS && address == mb::kCommandFirst;
   if (command) {
     ++commands_;
@@ -208,6 +214,7 @@ void ModbusServer::handle(int fd, const std::uint8_t* query, int length) {
       done_message_ = "a command arrived while another was running";
       return;
     }
+    stop_pending_ = false;
     pending_ = Command{last_seq_, std::vector<std::uint16_t>(regs + mb::kCommandFirst, regs + mb::kCommandFirst + mb::kCommandCount)};
     busy_ = true;
     stale_ = false;
@@ -215,6 +222,9 @@ void ModbusServer::handle(int fd, const std::uint8_t* query, int length) {
   } else if (function == MODBUS_FC_WRITE_SINGLE_REGISTER && address == kUrgent) {
     if (regs[kUrgent] == mb::Urgent::stop) machine_.stop();
     if (regs[kUrgent] == mb::Urgent::abort) machine_.abort();
+    // A command accepted but not yet running on the machine must not start after this.
+    std::lock_guard lock(mutex_);
+    if (busy_ && regs[kUrgent] == mb::Urgent::stop) stop_pending_ = true;
   } else if (function == MODBUS_FC_WRITE_SINGLE_REGISTER && (address == kHeartbeat || address == kHeartbeatTimeout)) {
     std::lock_guard lock(mutex_);
     last_heartbeat_ = std::chrono::steady_clock::now();
@@ -283,6 +293,17 @@ void ModbusServer::worker_loop() {
 }
 
 void ModbusServer::execute(const Command& command) {
+  {
+    std::lock_guard lock(mutex_);
+    if (stop_pending_ || stale_stop_) {
+      done_result_ = mb::to_code(stale_stop_ ? hal::FaultKind::comm_lost : hal::FaultKind::aborted);
+      done_message_ = stale_stop_ ? "the heartbeat went stale: the command did not start" : "stopped before it started";
+      stale_stop_ = stop_pending_ = false;
+      done_seq_ = command.seq;
+      busy_ = false;
+      return;
+    }
+  }
   const std::uint16_t* b = command.block.data();
   auto reg = [&](std::uint16_t address) { return b + (address - mb::kCommandFirst); };
   const Vec3 xyz = get_vec(reg(mb::address("x")), 1e-6);

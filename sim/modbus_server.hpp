@@ -76,7 +76,7 @@ class ModbusServer {
   std::mutex mutex_;
   std::condition_variable wake_;
   std::optional<Command> pending_;
-  bool busy_ = false, stale_stop_ = false, stale_ = false;
+  bool busy_ = false, stale_stop_ = false, stale_ = false, stop_pending_ = false;
   std::uint16_t done_seq_ = 0, done_result_ = 0;
   std::string done_message_;
   hal::TouchResult touch_;

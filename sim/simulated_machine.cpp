@@ -158,6 +158,9 @@ double SimulatedMachine::gaussian() {
 
 SimulatedMachine::Outcome SimulatedMachine::run(std::unique_lock<std::mutex>& lock, const Vec3& to_ref, double speed) {
   Outcome out;
+  // A stop or abort that came between the segments of one command ends it before the next.
+  if (abort_request_) fail(hal::FaultKind::aborted, "aborted before the next segment at " + text(reported(ref_)));
+  if (stop_request_) fail(hal::FaultKind::aborted, "stopped at " + text(reported(ref_)) + " by stop()");
   const Vec3 from = ref_;
   const double distance = (to_ref - from).norm();
   if (distance == 0) return out;
@@ -277,7 +280,8 @@ hal::TouchResult SimulatedMachine::probe(const hal::ProbeMove& move) {
   const Vec3 d = move.direction / length;
   check_in_box(move.start, "probe start");
   check_in_box(move.start + d * move.max_travel_mm, "probe end");
-  check_in_box(move.start - d * std::max(0.0, move.retract_mm - move.max_travel_mm), "probe retract");
+  // The farthest a retract can reach back: from a trigger just past the minimum travel.
+  check_in_box(move.start - d * std::max(0.0, move.retract_mm - move.min_travel_mm), "probe retract");
   begin_command();
   const Busy busy(busy_);
 
@@ -323,13 +327,12 @@ void SimulatedMachine::stop() {
 
 void SimulatedMachine::abort() {
   std::lock_guard lock(mutex_);
-  if (busy_) {
-    abort_request_ = true;
-  } else {
-    aborted_ = true;
-    fault_ = hal::FaultKind::aborted;
-    fault_message_ = "aborted while idle";
-  }
+  // Latched at once, whatever the motion thread is doing: an abort that lands just as a motion ends
+  // must still refuse the next one.
+  if (busy_) abort_request_ = true;
+  aborted_ = true;
+  fault_ = hal::FaultKind::aborted;
+  fault_message_ = busy_ ? "aborted during motion" : "aborted while idle";
   wake_.notify_all();
 }
 
