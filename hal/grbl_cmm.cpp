@@ -429,9 +429,10 @@ MachineInfo GrblCmm::info() {
   info.max_speed_mm_s = settings_.max_speed_mm_s;
   info.max_accel_mm_s2 = settings_.max_accel_mm_s2;
   info.probe_speed_mm_s = settings_.probe_speed_mm_s;
+  info.reference_sphere = settings_.reference_sphere;
+  std::lock_guard lock(mutex_);  // select_tip() and record_qualification() write these
   info.tips = settings_.tips;
   info.active_tip = active().id;
-  info.reference_sphere = settings_.reference_sphere;
   return info;
 }
 
@@ -444,10 +445,10 @@ MachineStatus GrblCmm::status() {
   s.moving = r.state == "Run" || r.state == "Home" || r.state == "Jog" || (r.state == "Hold" && r.substate == 1);
   s.estop = r.pins.find('R') != std::string::npos;
   s.aborted = aborted_;
+  s.t_s = r.clock_s.value_or(0);
+  std::lock_guard lock(mutex_);  // the tip may be changed by select_tip() on the motion thread
   s.position = r.mpos + active().offset;
   s.tip_id = active().id;
-  s.t_s = r.clock_s.value_or(0);
-  std::lock_guard lock(mutex_);
   s.fault = fault_;
   s.fault_message = fault_message_;
   return s;
@@ -584,6 +585,7 @@ void GrblCmm::reset() {
 
 void GrblCmm::select_tip(const std::string& tip_id) {
   require(Lifecycle::connected, "select_tip");
+  std::lock_guard lock(mutex_);
   for (std::size_t i = 0; i < settings_.tips.size(); ++i)
     if (settings_.tips[i].id == tip_id) {
       active_ = i;
@@ -594,6 +596,7 @@ void GrblCmm::select_tip(const std::string& tip_id) {
 
 void GrblCmm::record_qualification(const std::string& tip_id, const TipQualification& q) {
   require(Lifecycle::connected, "record_qualification");
+  std::lock_guard lock(mutex_);
   for (auto& tip : settings_.tips)
     if (tip.id == tip_id) {
       tip.ball_radius_mm = q.ball_radius_mm;

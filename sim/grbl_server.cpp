@@ -454,6 +454,7 @@ bool GrblServer::begin_motion(int& command, bool homing) {
   }
   in_motion_ = true;
   homing_ = homing;
+  machine_.accept_command();  // a feed hold or a reset from now on stops this line's motion
   return true;
 }
 

@@ -215,6 +215,7 @@ void ModbusServer::handle(int fd, const std::uint8_t* query, int length) {
       return;
     }
     stop_pending_ = false;
+    machine_.accept_command();  // a stop or a stale heartbeat from now on stops this command
     pending_ = Command{last_seq_, std::vector<std::uint16_t>(regs + mb::kCommandFirst, regs + mb::kCommandFirst + mb::kCommandCount)};
     busy_ = true;
     stale_ = false;

@@ -32,6 +32,7 @@ auto SimulatedCmm::command(const char* name, bool motion, F&& f) {
   if (n == faults.corrupt_reply_at_command)
     throw hal::Protocol(std::string(name) + ": the reply to command " + std::to_string(n) + " was corrupt");
   try {
+    if (motion) machine_->accept_command();
     return f();
   } catch (const hal::Fault&) {
     if (motion && lifecycle_ == hal::Lifecycle::enabled) lifecycle_ = hal::Lifecycle::connected;

@@ -21,16 +21,19 @@ std::string text(const Vec3& p) {
   return out.str();
 }
 
-// Marks the machine busy for one motion call, however the call ends.
+// Marks the machine busy for one motion call, however the call ends; at the end no stop request
+// outlives its command, so a stop that came too late cannot stop the next one.
 class Busy {
  public:
-  explicit Busy(bool& flag) : flag_(flag) { flag_ = true; }
-  ~Busy() { flag_ = false; }
+  Busy(bool& busy, bool& accepted, bool& stop_request) : busy_(busy), accepted_(accepted), stop_request_(stop_request) {
+    busy_ = true;
+  }
+  ~Busy() { busy_ = accepted_ = stop_request_ = false; }
   Busy(const Busy&) = delete;
   Busy& operator=(const Busy&) = delete;
 
  private:
-  bool& flag_;
+  bool &busy_, &accepted_, &stop_request_;
 };
 
 geometry::TriangleMesh part_mesh(const PartSource& part) {
@@ -145,7 +148,7 @@ void SimulatedMachine::check_in_box(const Vec3& ball, const char* what) const {
 void SimulatedMachine::begin_command() {
   ++commands_;
   spurious_pending_ = commands_ == config_.faults.spurious_trigger_at_motion;
-  stop_request_ = abort_request_ = false;
+  abort_request_ = false;  // abort() latched aborted_ too, which check_can_move() has seen
 }
 
 double SimulatedMachine::gaussian() {
@@ -231,7 +234,7 @@ void SimulatedMachine::home() {
   std::unique_lock lock(mutex_);
   check_can_move(false);
   begin_command();
-  const Busy busy(busy_);
+  const Busy busy(busy_, accepted_, stop_request_);
   const Vec3 home_ref = config_.home_position - active().info.offset;
   // Z first, clear of the part, then across: how every machine homes.
   for (const Vec3& target : {Vec3(ref_.x(), ref_.y(), home_ref.z()), home_ref}) {
@@ -249,7 +252,7 @@ void SimulatedMachine::move(const hal::Move& move) {
   check_in_box(move.target, "move target");
   if (move.speed_mm_s < 0 || !std::isfinite(move.speed_mm_s)) throw std::invalid_argument("move speed must be ≥ 0");
   begin_command();
-  const Busy busy(busy_);
+  const Busy busy(busy_, accepted_, stop_request_);
   if (run(lock, move.target - active().info.offset, move.speed_mm_s).triggered)
     fail(hal::FaultKind::early_trigger, "the probe triggered during a guarded move at " + text(reported(ref_)) +
                                             " on the way to " + text(move.target));
@@ -283,7 +286,7 @@ hal::TouchResult SimulatedMachine::probe(const hal::ProbeMove& move) {
   // The farthest a retract can reach back: from a trigger just past the minimum travel.
   check_in_box(move.start - d * std::max(0.0, move.retract_mm - move.min_travel_mm), "probe retract");
   begin_command();
-  const Busy busy(busy_);
+  const Busy busy(busy_, accepted_, stop_request_);
 
   const Vec3 offset = active().info.offset;
   const Vec3 start_ref = move.start - offset;
@@ -319,9 +322,16 @@ hal::TouchResult SimulatedMachine::probe(const hal::ProbeMove& move) {
   return result;
 }
 
+void SimulatedMachine::accept_command() {
+  std::lock_guard lock(mutex_);
+  if (busy_) return;  // the command will be refused; a stop meant for the running one stands
+  accepted_ = true;
+  stop_request_ = false;
+}
+
 void SimulatedMachine::stop() {
   std::lock_guard lock(mutex_);
-  if (busy_) stop_request_ = true;
+  if (busy_ || accepted_) stop_request_ = true;  // an idle machine has nothing to stop
   wake_.notify_all();
 }
 

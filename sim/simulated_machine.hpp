@@ -41,6 +41,9 @@ class SimulatedMachine {
   void home();
   void move(const hal::Move& move);
   hal::TouchResult probe(const hal::ProbeMove& move);
+  // A front (a driver, a server) calls this when it accepts a command from its link, before it runs
+  // it: a stop() from then on stops that command, even one that has not begun to move yet.
+  void accept_command();
   void stop();
   void abort();
   void reset();
@@ -92,6 +95,7 @@ class SimulatedMachine {
   bool homed_ = false, estop_ = false, aborted_ = false, estop_fired_ = false;
   bool busy_ = false;  // a motion call is running
   bool stop_request_ = false, abort_request_ = false;
+  bool accepted_ = false;  // accept_command() was called and its command has not ended
   std::optional<hal::FaultKind> fault_;
   std::string fault_message_;
   int commands_ = 0;

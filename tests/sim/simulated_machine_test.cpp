@@ -62,6 +62,28 @@ TEST_F(SimulatedMachineTest, TheClockAdvancesByEachMotionsProfile) {
   EXPECT_NEAR(machine.status().t_s - t0, 100.0 / 200 + 0.2, 1e-12);
 }
 
+TEST_F(SimulatedMachineTest, AStopAfterACommandWasAcceptedStopsItEvenBeforeItMoves) {
+  machine.home();
+  const Vec3 here = machine.status().position;
+  machine.stop();  // idle and nothing accepted: nothing to stop, and nothing left standing
+  machine.move({here - Vec3(0, 0, 10), 0});
+  machine.accept_command();  // a front took a command off its link; the stop overtakes it
+  machine.stop();
+  EXPECT_THROW(machine.move({here - Vec3(0, 0, 20), 0}), hal::Aborted);
+  EXPECT_LT((machine.status().position - (here - Vec3(0, 0, 10))).norm(), 1e-9);  // it never moved
+  machine.move({here - Vec3(0, 0, 20), 0});  // the stop ended with its command
+}
+
+TEST_F(SimulatedMachineTest, AnIdleAbortLatchesUntilResetAndKeepsThePosition) {
+  machine.home();
+  machine.abort();  // as one that lands just after a motion ended
+  EXPECT_TRUE(machine.status().aborted);
+  EXPECT_THROW(machine.move({machine.status().position - Vec3(0, 0, 10), 0}), hal::Aborted);
+  machine.reset();
+  EXPECT_TRUE(machine.status().homed);  // nothing was moving, so nothing was lost
+  machine.move({machine.status().position - Vec3(0, 0, 10), 0});
+}
+
 TEST(SimulatedMachineNoise, TriggerNoiseHasItsConfiguredSpread) {
   SimulatedMachine machine(sim_config_from_json({{"trigger_sigma_mm", 0.002}, {"seed", 11}, {"part", {{"analytic", "cube"}}}}));
   machine.home();
