@@ -1,0 +1,102 @@
+// touches.jsonl: JSON lines, fsync per append, a torn tail dropped on recovery and cut before appending.
+#include "daemon/touch_journal.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "daemon/atomic_file.hpp"
+#include "geometry/file_error.hpp"
+
+namespace cmm::daemon {
+
+namespace {
+nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+JournalEntry from_json(const nlohmann::json& j) {
+  JournalEntry e;
+  e.touch_id = j.at("touch").get<int>();
+  e.result.contact = j.at("contact").get<bool>();
+  const auto& c = j.at("centre");
+  e.result.centre = hal::Vec3(c.at(0).get<double>(), c.at(1).get<double>(), c.at(2).get<double>());
+  e.result.travel_mm = j.at("travel_mm").get<double>();
+  e.result.t_s = j.at("t_s").get<double>();
+  e.result.tip_id = j.at("tip").get<std::string>();
+  return e;
+}
+
+[[noreturn]] void fail(const std::filesystem::path& file, const std::string& step) {
+  throw geometry::FileError::whole(file, step + ": " + std::strerror(errno));
+}
+}  // namespace
+
+std::string to_json_line(const JournalEntry& e) {
+  // nlohmann prints the shortest text that reads back as the same double: a touch read back is the
+  // very number that was measured.
+  nlohmann::json j = {{"touch", e.touch_id},        {"contact", e.result.contact}, {"centre", vec(e.result.centre)},
+                      {"travel_mm", e.result.travel_mm}, {"t_s", e.result.t_s},     {"tip", e.result.tip_id}};
+  return j.dump();
+}
+
+Recovery recover_journal(const std::filesystem::path& file) {
+  Recovery out;
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return out;
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  std::size_t line_start = 0, line_number = 0;
+  while (line_start < text.size()) {
+    ++line_number;
+    const std::size_t end = text.find('\n', line_start);
+    const bool complete = end != std::string::npos;
+    const std::string line = text.substr(line_start, (complete ? end : text.size()) - line_start);
+    const bool last = !complete || end + 1 >= text.size();
+    try {
+      if (!complete) throw std::runtime_error("no newline");
+      out.entries.push_back(from_json(nlohmann::json::parse(line)));
+    } catch (const std::exception& e) {
+      if (!last) throw geometry::FileError::at_line(file, line_number, std::string("not a journal line: ") + e.what());
+      out.torn_tail = true;  // a crash mid-append: the touch it held was never reported as made
+    }
+    if (!complete) break;
+    line_start = end + 1;
+  }
+  return out;
+}
+
+TouchJournal::TouchJournal(const std::filesystem::path& file) : file_(file) {
+  // Cut a torn tail so the next line starts on a line of its own.
+  const Recovery recovered = recover_journal(file);
+  if (recovered.torn_tail) {
+    std::string kept;
+    for (const auto& e : recovered.entries) kept += to_json_line(e) + "\n";
+    write_atomically(file, kept);
+  }
+  fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd_ < 0) fail(file, "cannot open the touch journal");
+  sync_folder(file.has_parent_path() ? file.parent_path() : ".");
+}
+
+TouchJournal::~TouchJournal() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void TouchJournal::append(const JournalEntry& entry) {
+  const std::string line = to_json_line(entry) + "\n";
+  for (std::size_t done = 0; done < line.size();) {
+    const ssize_t n = ::write(fd_, line.data() + done, line.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(file_, "append");
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fdatasync(fd_) != 0) fail(file_, "fdatasync");
+}
+
+}  // namespace cmm::daemon

@@ -1,0 +1,49 @@
+// A job's append-only touches.jsonl: one JSON line per touch the machine made, fsynced before the
+// job goes on, so a daemon killed at any moment keeps every touch it reported (DESIGN.md, Files).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "hal/motion.hpp"
+
+namespace cmm::daemon {
+
+// One journal line: which planned touch it was and what the machine reported.
+struct JournalEntry {
+  int touch_id = -1;       // the plan's touch id
+  hal::TouchResult result;
+};
+
+std::string to_json_line(const JournalEntry& entry);  // one line, no newline
+
+struct Recovery {
+  std::vector<JournalEntry> entries;  // every complete line, in order
+  bool torn_tail = false;             // the last line was cut short by a crash, and was dropped
+};
+
+// Reads a journal back. A missing file is an empty journal. A torn last line (no newline, or not
+// JSON) is what a crash mid-append leaves: it is dropped and reported. A bad line before the last
+// is not a crash's doing: geometry::FileError naming the file and the line.
+Recovery recover_journal(const std::filesystem::path& file);
+
+class TouchJournal {
+ public:
+  // Opens `file` for appending (creating it and syncing its folder). A torn tail left by a crash is
+  // cut off first, so new lines never follow half a line.
+  explicit TouchJournal(const std::filesystem::path& file);
+  ~TouchJournal();
+  TouchJournal(const TouchJournal&) = delete;
+  TouchJournal& operator=(const TouchJournal&) = delete;
+
+  // Appends one line and fsyncs it; when this returns, the touch survives a crash.
+  void append(const JournalEntry& entry);
+  const std::filesystem::path& file() const { return file_; }
+
+ private:
+  std::filesystem::path file_;
+  int fd_ = -1;
+};
+
+}  // namespace cmm::daemon

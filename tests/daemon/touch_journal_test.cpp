@@ -1,0 +1,151 @@
+// The touch journal and atomic files against crashes: exact round trips, a torn tail dropped and
+// cut, a damaged middle named by line, and a process killed with SIGKILL mid-append losing nothing
+// it had reported.
+#include "daemon/touch_journal.hpp"
+
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "daemon/atomic_file.hpp"
+#include "geometry/file_error.hpp"
+
+namespace cmm::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+fs::path fresh_folder(const std::string& name) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("cmmd-" + name + "-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+JournalEntry entry(int id) {
+  JournalEntry e;
+  e.touch_id = id;
+  e.result.contact = id % 7 != 3;
+  e.result.centre = hal::Vec3(278.000123456789 + id * 0.1, 353.1 / 3, 42.000000912345 - id * 1e-7);
+  e.result.travel_mm = 4.000731 + id;
+  e.result.t_s = 12.345678901234 * id;
+  e.result.tip_id = "T1";
+  return e;
+}
+
+std::size_t lines_in(const fs::path& file) {
+  std::ifstream in(file);
+  return static_cast<std::size_t>(std::count(std::istreambuf_iterator<char>(in), {}, '\n'));
+}
+
+TEST(TouchJournal, ReadsBackExactlyWhatWasAppended) {
+  const fs::path file = fresh_folder("journal") / "touches.jsonl";
+  {
+    TouchJournal journal(file);
+    for (int i = 0; i < 5; ++i) journal.append(entry(i));
+  }
+  const Recovery r = recover_journal(file);
+  EXPECT_FALSE(r.torn_tail);
+  ASSERT_EQ(r.entries.size(), 5u);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(r.entries[static_cast<std::size_t>(i)].touch_id, i);
+    EXPECT_EQ(r.entries[static_cast<std::size_t>(i)].result.centre, entry(i).result.centre);  // bit for bit
+    EXPECT_EQ(r.entries[static_cast<std::size_t>(i)].result.t_s, entry(i).result.t_s);
+    EXPECT_EQ(r.entries[static_cast<std::size_t>(i)].result.contact, entry(i).result.contact);
+  }
+  EXPECT_TRUE(recover_journal(file.parent_path() / "none.jsonl").entries.empty());
+}
+
+TEST(TouchJournal, ATornTailIsDroppedAndCutBeforeTheNextAppend) {
+  const fs::path file = fresh_folder("torn") / "touches.jsonl";
+  {
+    std::ofstream out(file, std::ios::binary);
+    out << to_json_line(entry(0)) << "\n" << to_json_line(entry(1)) << "\n" << to_json_line(entry(2)).substr(0, 25);
+  }
+  Recovery r = recover_journal(file);
+  EXPECT_TRUE(r.torn_tail);
+  EXPECT_EQ(r.entries.size(), 2u);
+  {
+    TouchJournal journal(file);
+    journal.append(entry(2));
+  }
+  r = recover_journal(file);
+  EXPECT_FALSE(r.torn_tail);
+  ASSERT_EQ(r.entries.size(), 3u);
+  EXPECT_EQ(r.entries[2].touch_id, 2);
+}
+
+TEST(TouchJournal, ADamagedLineBeforeTheLastIsAnErrorNamingIt) {
+  const fs::path file = fresh_folder("damaged") / "touches.jsonl";
+  {
+    std::ofstream out(file, std::ios::binary);
+    out << to_json_line(entry(0)) << "\n{\"touch\": oops}\n" << to_json_line(entry(2)) << "\n";
+  }
+  try {
+    recover_journal(file);
+    FAIL() << "a damaged middle line was accepted";
+  } catch (const geometry::FileError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("touches.jsonl"));
+    EXPECT_THAT(e.what(), HasSubstr("line 2"));
+  }
+}
+
+TEST(TouchJournal, AProcessKilledMidAppendLosesNoReportedTouch) {
+  const fs::path dir = fresh_folder("killed");
+  const fs::path file = dir / "touches.jsonl", reported = dir / "reported";
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlives the test
+    // Appends for ever; after each append returns, the touch counts as reported.
+    TouchJournal journal(file);
+    for (int i = 0;; ++i) {
+      journal.append(entry(i));
+      std::ofstream(reported, std::ios::trunc) << i;
+    }
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (lines_in(file) < 200 && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+  kill(child, SIGKILL);
+  waitpid(child, nullptr, 0);
+
+  int last_reported = -1;
+  std::ifstream(reported) >> last_reported;
+  const Recovery r = recover_journal(file);
+  ASSERT_GE(r.entries.size(), 200u);
+  EXPECT_GE(static_cast<int>(r.entries.size()) - 1, last_reported);  // every reported touch is there
+  for (std::size_t i = 0; i < r.entries.size(); ++i) {
+    ASSERT_EQ(r.entries[i].touch_id, static_cast<int>(i)) << "a gap or a repeat";
+    EXPECT_EQ(r.entries[i].result.centre, entry(static_cast<int>(i)).result.centre);
+  }
+}
+
+TEST(AtomicFile, ReplacesWholeAndLeavesNoTempFile) {
+  const fs::path dir = fresh_folder("atomic");
+  const fs::path file = dir / "result.json";
+  write_atomically(file, "first");
+  write_atomically(file, "second, longer");
+  std::ifstream in(file);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_EQ(text, "second, longer");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+  try {
+    write_atomically(dir / "no" / "such" / "folder.json", "x");
+    FAIL() << "wrote into a folder that does not exist";
+  } catch (const geometry::FileError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("folder.json"));
+  }
+}
+
+}  // namespace
+}  // namespace cmm::daemon
