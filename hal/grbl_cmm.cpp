@@ -84,9 +84,7 @@ GrblCmm::GrblCmm() = default;
 GrblCmm::~GrblCmm() { disconnect(); }
 
 void GrblCmm::require(Lifecycle at_least, const char* what) const {
-  if (lifecycle_.load() < at_least)
-    throw StateError(std::string(what) + ": the Grbl machine is " + to_string(lifecycle_.load()) + ", needs " +
-                     to_string(at_least));
+  require_lifecycle(lifecycle_.load(), at_least, what, "the Grbl machine");
 }
 
 void GrblCmm::configure(const nlohmann::json& block) {

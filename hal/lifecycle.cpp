@@ -1,6 +1,8 @@
 // Lifecycle names for status reports and errors.
 #include "hal/machine_info.hpp"
 
+#include <string>
+
 namespace cmm::hal {
 
 const char* to_string(Lifecycle state) {
@@ -11,6 +13,11 @@ const char* to_string(Lifecycle state) {
     case Lifecycle::enabled: return "enabled";
   }
   return "unknown";
+}
+
+void require_lifecycle(Lifecycle now, Lifecycle needed, const char* what, const char* machine) {
+  if (now < needed)
+    throw StateError(std::string(what) + ": " + machine + " is " + to_string(now) + ", needs " + to_string(needed));
 }
 
 }  // namespace cmm::hal

@@ -56,6 +56,9 @@ struct MachineInfo {
 // configure → connect → enable; disable and faults drop back to connected; disconnect to configured.
 enum class Lifecycle { unconfigured, configured, connected, enabled };
 const char* to_string(Lifecycle state);
+// Throws StateError ("move: the Modbus machine is connected, needs enabled") when `now` is short
+// of `needed`: every driver's check before a call.
+void require_lifecycle(Lifecycle now, Lifecycle needed, const char* what, const char* machine);
 
 // What the machine is doing now. `fault` holds the last fault until the next motion succeeds or
 // reset() clears a latched one (abort, e-stop).

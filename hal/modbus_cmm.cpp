@@ -44,9 +44,7 @@ ModbusSettings modbus_settings_from_json(const nlohmann::json& j) {
 ModbusCmm::~ModbusCmm() { disconnect(); }
 
 void ModbusCmm::require(Lifecycle at_least, const char* what) const {
-  if (lifecycle_.load() < at_least)
-    throw StateError(std::string(what) + ": the Modbus machine is " + to_string(lifecycle_.load()) + ", needs " +
-                     to_string(at_least));
+  require_lifecycle(lifecycle_.load(), at_least, what, "the Modbus machine");
 }
 
 void ModbusCmm::configure(const nlohmann::json& block) {

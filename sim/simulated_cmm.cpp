@@ -8,9 +8,7 @@ namespace cmm::sim {
 SimulatedCmm::SimulatedCmm(std::string base_dir) : base_dir_(std::move(base_dir)) {}
 
 void SimulatedCmm::require(hal::Lifecycle at_least, const char* what) const {
-  if (lifecycle_.load() < at_least)
-    throw hal::StateError(std::string(what) + ": the simulator is " + to_string(lifecycle_.load()) + ", needs " +
-                          to_string(at_least));
+  hal::require_lifecycle(lifecycle_.load(), at_least, what, "the simulator");
 }
 
 template <class F>
