@@ -1,0 +1,21 @@
+#include "daemon/rpc_error.hpp"
+
+namespace cmm::daemon {
+
+const char* to_string(Role role) {
+  switch (role) {
+    case Role::none: return "none";
+    case Role::observer: return "observer";
+    case Role::operator_: return "operator";
+  }
+  return "?";
+}
+
+Role role_from_string(const std::string& text) {
+  if (text == "none") return Role::none;
+  if (text == "observer") return Role::observer;
+  if (text == "operator") return Role::operator_;
+  throw std::invalid_argument("unknown role \"" + text + "\" (expected observer or operator)");
+}
+
+}  // namespace cmm::daemon
