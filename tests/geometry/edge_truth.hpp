@@ -6,16 +6,13 @@
 
 #include "geometry/analytic_parts.hpp"
 #include "geometry/feature_model.hpp"
+#include "geometry/true_edge_distance.hpp"
 
 namespace cmm::geometry::testing {
 
-struct NearestTrueEdge {
-  int edge = -1;
-  double distance = 1e300;
-  TrueEdgeSample at;  // interpolated between the two nearest samples
-};
-
-NearestTrueEdge nearest_true_edge(const AnalyticPart& part, const Vec3& p);
+// The distance to the true edges lives in geometry (cmm-truth uses it too).
+using geometry::NearestTrueEdge;
+using geometry::nearest_true_edge;
 
 // Fraction of the true sharp-edge length within `reach` of some sharp-edge or hole-rim point.
 double covered_fraction(const AnalyticPart& part, const FeatureModel& model, double reach);
