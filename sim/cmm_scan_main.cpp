@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "geometry/analytic_parts.hpp"
 #include "geometry/mesh_io.hpp"
 #include "sim/raw_scan.hpp"
+#include "sim/sim_config.hpp"
 #include "sim/scanned_mesh.hpp"
 
 namespace {
@@ -21,7 +23,8 @@ namespace {
 using namespace cmm;
 
 struct Options {
-  std::string part, mesh, cloud, truth;
+  std::string part, mesh, cloud, truth, sim_config, plate_corners;
+  double corner_noise = 0.01, rough_error = 1;
   double edge_length = 1, noise = 0.05, spacing = 0.5, stray_fraction = 0.002;
   double max_incidence_deg = sim::kDefaultMaxIncidenceDeg;
   sim::ViewSetOptions views;
@@ -30,7 +33,44 @@ struct Options {
 
 nlohmann::json vec(const geometry::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
-int scan(const Options& o) {
+// What registration by a measured plate starts from: the plate's corners as the scan shows them
+// (S is the part's own frame, the frame of the scanned mesh) and where an operator would jog the
+// probe to each corner on the machine (M, a millimetre or so off), from the simulator's truth.
+nlohmann::json plate_corners(const sim::SimConfig& config, const Options& o) {
+  std::mt19937_64 random(o.seed + 7919);
+  std::normal_distribution<double> scan_noise(0, o.corner_noise);
+  std::uniform_real_distribution<double> rough(-o.rough_error, o.rough_error);
+  const Eigen::Isometry3d T_S_P = config.T_P_Part.inverse();
+  nlohmann::json scan = nlohmann::json::array(), machine = nlohmann::json::array();
+  for (int id = 1; id <= config.plate.corner_count(); ++id) {
+    const geometry::Vec3 c = config.plate.corner(id);
+    const geometry::Vec3 s = T_S_P * c + geometry::Vec3(scan_noise(random), scan_noise(random), scan_noise(random));
+    const geometry::Vec3 m = config.T_M_P * c + geometry::Vec3(rough(random), rough(random), 0.3 * rough(random));
+    scan.push_back({{"id", id}, {"scan", vec(s)}});
+    machine.push_back({{"id", id}, {"machine", vec(m)}});
+  }
+  return {{"scan_corners", scan}, {"rough_machine", machine}};
+}
+
+int scan(Options o) {
+  if (!o.sim_config.empty()) {
+    std::ifstream in(o.sim_config);
+    if (!in) throw std::runtime_error("cannot open " + o.sim_config);
+    const sim::SimConfig config = sim::sim_config_from_json(
+        nlohmann::json::parse(in), std::filesystem::path(o.sim_config).parent_path().string());
+    if (!config.part.mesh_file.empty()) throw std::invalid_argument(o.sim_config + ": its part is a mesh file, not an analytic part");
+    if (o.part.empty()) o.part = config.part.analytic;
+    if (o.part != config.part.analytic)
+      throw std::invalid_argument("--part " + o.part + " is not the simulator's part (" + config.part.analytic + ")");
+    if (!o.plate_corners.empty()) {
+      std::ofstream out(o.plate_corners);
+      out << plate_corners(config, o).dump(1) << '\n';
+      if (!out.flush()) throw std::runtime_error("cannot write " + o.plate_corners);
+      std::cout << o.plate_corners << ": the plate's " << config.plate.corner_count()
+                << " corners as scanned (S) and roughly jogged to (M)\n";
+    }
+  }
+  if (o.part.empty()) throw std::invalid_argument("give --part or --sim-config");
   const geometry::AnalyticPart part = geometry::make_analytic_part(o.part, o.edge_length);
   sim::ViewSetOptions view_options = o.views;
   view_options.seed = o.seed;
@@ -93,9 +133,16 @@ int main(int argc, char** argv) {
   CLI::App app{"cmm-scan: synthesize the scan of an analytic test part (scanned reference mesh, raw cloud)"};
   Options o;
   const std::vector<std::string>& names = geometry::analytic_part_names();
-  app.add_option("--part", o.part, "the true part")
-      ->required()
+  app.add_option("--part", o.part, "the true part (default: the simulator's, with --sim-config)")
       ->check(CLI::IsMember(names));
+  app.add_option("--sim-config", o.sim_config, "cmm-sim config: the part, and the plate and poses --plate-corners uses")
+      ->check(CLI::ExistingFile);
+  app.add_option("--plate-corners", o.plate_corners,
+                 "write {scan_corners, rough_machine} for a job's measure_plate registration (needs --sim-config)")
+      ->needs("--sim-config");
+  app.add_option("--corner-noise", o.corner_noise, "sigma of the scanned plate corners, mm")->check(CLI::NonNegativeNumber);
+  app.add_option("--rough-error", o.rough_error, "largest error of the jogged machine corners, mm")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--edge-length", o.edge_length, "edge length of the true part's mesh, mm")->check(CLI::PositiveNumber);
   app.add_option("--noise", o.noise, "Gaussian noise sigma: per vertex coordinate (mesh), along the beam (cloud), mm")
       ->check(CLI::NonNegativeNumber);
@@ -114,8 +161,8 @@ int main(int argc, char** argv) {
     const int code = app.exit(error);  // prints help, or the error and a hint
     return code == 0 ? 0 : 2;
   }
-  if (o.mesh.empty() && o.cloud.empty()) {
-    std::cerr << "cmm-scan: nothing to write: give --mesh out.ply and/or --cloud out.ply\n";
+  if (o.mesh.empty() && o.cloud.empty() && o.plate_corners.empty()) {
+    std::cerr << "cmm-scan: nothing to write: give --mesh out.ply, --cloud out.ply and/or --plate-corners out.json\n";
     return 2;
   }
   try {
