@@ -124,10 +124,10 @@ std::vector<JobRecord> JobStore::recover() {
 JobRecord JobStore::create(const nlohmann::json& request, std::string name, std::string model) {
   std::lock_guard lock(mutex_);
   JobRecord record;
-  record.id = next_id_;
+  // A folder that appeared since the scan (another writer, or an operator) is skipped, not reused.
+  while (!fs::create_directory(folder(next_id_))) ++next_id_;
+  record.id = next_id_++;
   const fs::path dir = folder(record.id);
-  if (!fs::create_directory(dir)) throw geometry::FileError::whole(dir, "job folder exists already");
-  ++next_id_;
   sync_folder(jobs_dir_);
   record.name = std::move(name);
   record.model = std::move(model);

@@ -124,6 +124,7 @@ UploadStatus ModelStore::upload(const UploadChunk& chunk) {
                         0);
   }
   if (chunk.offset == 0 || !bytes.empty()) write_part(part, chunk.offset, bytes);
+  if (chunk.offset == 0) sync_folder(partial_dir_);  // the part file itself survives a power cut
   const std::uint64_t now_received = chunk.offset + bytes.size();
   if (now_received < chunk.size) return {model, now_received, false};
   return finish(sha, ext, chunk.size);

@@ -3,33 +3,21 @@
 // process killed with SIGKILL while creating and saving jobs leaves a store that recovers whole.
 #include "daemon/job_store.hpp"
 
-#include <signal.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "fresh_folder.hpp"
 #include "geometry/file_error.hpp"
+#include "killed_writer.hpp"
 
 namespace cmm::daemon {
 namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-
-fs::path fresh_folder(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("cmmd-jobs-" + name + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 nlohmann::json request(int seed) {
   return {{"model", "file:block.ply"}, {"delta_mm", 0.2}, {"seed", seed}, {"name", "block " + std::to_string(seed)}};
@@ -74,7 +62,7 @@ TEST(JobRecord, JsonIsTheApiRecordWithoutTheRequest) {
 }
 
 TEST(JobStore, CreatedAndSavedJobsComeBackOnRecover) {
-  const fs::path dir = fresh_folder("roundtrip");
+  const fs::path dir = fresh_folder("jobs-roundtrip");
   JobStore store(dir);
   JobRecord first = store.create(request(1), "first", "file:block.ply");
   const JobRecord second = store.create(request(2), "second", "sha256:" + std::string(64, 'b'));
@@ -102,7 +90,7 @@ TEST(JobStore, CreatedAndSavedJobsComeBackOnRecover) {
 }
 
 TEST(JobStore, RunningJobsBecomeInterruptedAndIdsGoOnAfterARestart) {
-  const fs::path dir = fresh_folder("restart");
+  const fs::path dir = fresh_folder("jobs-restart");
   {
     JobStore store(dir);
     for (JobState s : {JobState::queued, JobState::planning, JobState::probing, JobState::paused, JobState::done}) {
@@ -127,7 +115,7 @@ TEST(JobStore, RunningJobsBecomeInterruptedAndIdsGoOnAfterARestart) {
 }
 
 TEST(JobStore, AFolderLeftHalfCreatedIsSkippedAndItsIdNotReused) {
-  const fs::path dir = fresh_folder("half");
+  const fs::path dir = fresh_folder("jobs-half");
   {
     JobStore store(dir);
     store.create(request(1), "one", "file:block.ply");
@@ -143,7 +131,7 @@ TEST(JobStore, AFolderLeftHalfCreatedIsSkippedAndItsIdNotReused) {
 }
 
 TEST(JobStore, ADamagedJobFileIsAnErrorNamingIt) {
-  const fs::path dir = fresh_folder("damaged");
+  const fs::path dir = fresh_folder("jobs-damaged");
   {
     JobStore store(dir);
     store.create(request(1), "one", "file:block.ply");
@@ -167,34 +155,29 @@ TEST(JobStore, ADamagedJobFileIsAnErrorNamingIt) {
 }
 
 TEST(JobStore, AProcessKilledWhileCreatingAndSavingLeavesARecoverableStore) {
-  const fs::path dir = fresh_folder("killed");
+  const fs::path dir = fresh_folder("jobs-killed");
   const fs::path jobs = dir / "jobs", reported = dir / "reported";
-  const pid_t child = fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlives the test
-    // Creates jobs for ever, saving each a few times; after save returns, its progress counts as
-    // reported.
-    JobStore store(jobs);
-    for (int i = 1;; ++i) {
-      JobRecord r = store.create(request(i), "job " + std::to_string(i), "file:block.ply");
-      r.state = JobState::probing;
-      for (int done = 1; done <= 3; ++done) {
-        r.progress = {"probing", done, 3, 0};
-        store.save(r);
-        std::ofstream(reported, std::ios::trunc) << r.id << " " << done;
-      }
-    }
-  }
   auto jobs_made = [&] {
     std::error_code error;
     const auto n = std::distance(fs::directory_iterator(jobs, error), fs::directory_iterator());
     return error ? 0 : n;
   };
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (jobs_made() < 60 && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
-  kill(child, SIGKILL);
-  waitpid(child, nullptr, 0);
+  ASSERT_TRUE(kill_writer_when(
+      [&] {
+        // Creates jobs for ever, saving each a few times; after save returns, its progress counts
+        // as reported.
+        JobStore store(jobs);
+        for (int i = 1;; ++i) {
+          JobRecord r = store.create(request(i), "job " + std::to_string(i), "file:block.ply");
+          r.state = JobState::probing;
+          for (int done = 1; done <= 3; ++done) {
+            r.progress = {"probing", done, 3, 0};
+            store.save(r);
+            std::ofstream(reported, std::ios::trunc) << r.id << " " << done;
+          }
+        }
+      },
+      [&] { return jobs_made() >= 60; }));
 
   int last_id = 0, last_done = 0;
   std::ifstream(reported) >> last_id >> last_done;

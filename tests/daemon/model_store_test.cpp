@@ -3,8 +3,6 @@
 // "file:" references that must not leave models_dir.
 #include "daemon/model_store.hpp"
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <vector>
@@ -15,19 +13,13 @@
 #include "daemon/base64.hpp"
 #include "daemon/rpc_error.hpp"
 #include "daemon/sha256.hpp"
+#include "fresh_folder.hpp"
 
 namespace cmm::daemon {
 namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-
-fs::path fresh_folder(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("cmmd-models-" + name + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 std::string read_all(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -93,7 +85,7 @@ TEST(Sha256, MatchesTheFipsDigests) {
 }
 
 TEST(ModelStore, UploadsARealMeshInUnevenChunks) {
-  const fs::path dir = fresh_folder("chunks");
+  const fs::path dir = fresh_folder("models-chunks");
   ModelStore store(dir / "models", "");
   const Upload up;
   const std::uint64_t lengths[] = {1, 4095, 100000, 3, 250001};
@@ -115,7 +107,7 @@ TEST(ModelStore, UploadsARealMeshInUnevenChunks) {
 }
 
 TEST(ModelStore, AWrongSha256IsRefusedAndNothingIsStored) {
-  const fs::path dir = fresh_folder("wrong-sha");
+  const fs::path dir = fresh_folder("models-wrong-sha");
   ModelStore store(dir / "models", "");
   Upload up;
   up.sha = std::string(64, 'a');
@@ -129,7 +121,7 @@ TEST(ModelStore, AWrongSha256IsRefusedAndNothingIsStored) {
 }
 
 TEST(ModelStore, AChunkOutOfOrderGetsTheExpectedOffset) {
-  const fs::path dir = fresh_folder("order");
+  const fs::path dir = fresh_folder("models-order");
   ModelStore store(dir / "models", "");
   const Upload up;
   store.upload(up.chunk(0, 5000));
@@ -146,7 +138,7 @@ TEST(ModelStore, AChunkOutOfOrderGetsTheExpectedOffset) {
 }
 
 TEST(ModelStore, AnUploadGoesOnAfterARestart) {
-  const fs::path dir = fresh_folder("resume");
+  const fs::path dir = fresh_folder("models-resume");
   const Upload up;
   {
     ModelStore store(dir / "models", "");
@@ -161,7 +153,7 @@ TEST(ModelStore, AnUploadGoesOnAfterARestart) {
 }
 
 TEST(ModelStore, AModelAlreadyStoredCompletesAtOnce) {
-  const fs::path dir = fresh_folder("duplicate");
+  const fs::path dir = fresh_folder("models-duplicate");
   ModelStore store(dir / "models", "");
   const Upload up;
   ASSERT_TRUE(store.upload(up.chunk(0, up.bytes.size())).complete);
@@ -173,7 +165,7 @@ TEST(ModelStore, AModelAlreadyStoredCompletesAtOnce) {
 }
 
 TEST(ModelStore, RefusesBadBase64BadNamesBadDigestsAndOversizedModels) {
-  const fs::path dir = fresh_folder("refusals");
+  const fs::path dir = fresh_folder("models-refusals");
   const Upload up;
   ModelStore store(dir / "models", "", 100000);
   UploadChunk chunk = up.chunk(0, 10);
@@ -207,7 +199,7 @@ TEST(ModelStore, RefusesBadBase64BadNamesBadDigestsAndOversizedModels) {
 }
 
 TEST(ModelStore, ResolvesFilesInsideModelsDirOnly) {
-  const fs::path dir = fresh_folder("resolve");
+  const fs::path dir = fresh_folder("models-resolve");
   const fs::path models = dir / "library";
   fs::create_directories(models / "blocks");
   std::ofstream(models / "blocks" / "a.stl") << "solid a\nendsolid a\n";
