@@ -3,34 +3,22 @@
 // it had reported.
 #include "daemon/touch_journal.hpp"
 
-#include <signal.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "daemon/atomic_file.hpp"
+#include "fresh_folder.hpp"
 #include "geometry/file_error.hpp"
+#include "killed_writer.hpp"
 
 namespace cmm::daemon {
 namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-
-fs::path fresh_folder(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("cmmd-" + name + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 JournalEntry entry(int id) {
   JournalEntry e;
@@ -103,21 +91,16 @@ TEST(TouchJournal, ADamagedLineBeforeTheLastIsAnErrorNamingIt) {
 TEST(TouchJournal, AProcessKilledMidAppendLosesNoReportedTouch) {
   const fs::path dir = fresh_folder("killed");
   const fs::path file = dir / "touches.jsonl", reported = dir / "reported";
-  const pid_t child = fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlives the test
-    // Appends for ever; after each append returns, the touch counts as reported.
-    TouchJournal journal(file);
-    for (int i = 0;; ++i) {
-      journal.append(entry(i));
-      std::ofstream(reported, std::ios::trunc) << i;
-    }
-  }
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (lines_in(file) < 200 && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
-  kill(child, SIGKILL);
-  waitpid(child, nullptr, 0);
+  ASSERT_TRUE(kill_writer_when(
+      [&] {
+        // Appends for ever; after each append returns, the touch counts as reported.
+        TouchJournal journal(file);
+        for (int i = 0;; ++i) {
+          journal.append(entry(i));
+          std::ofstream(reported, std::ios::trunc) << i;
+        }
+      },
+      [&] { return lines_in(file) >= 200; }));
 
   int last_reported = -1;
   std::ifstream(reported) >> last_reported;

@@ -1,0 +1,163 @@
+// Job folders on disk: numbered folders, JSON files written with write_atomically, recovery that
+// turns the jobs a restart cut short into interrupted ones.
+#include "daemon/job_store.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <spdlog/spdlog.h>
+
+#include "daemon/atomic_file.hpp"
+#include "geometry/file_error.hpp"
+#include "hal/utc_time.hpp"
+
+namespace cmm::daemon {
+
+namespace fs = std::filesystem;
+
+namespace {
+constexpr const char* record_file = "job.json";
+constexpr const char* request_file = "request.json";
+
+// The id a job folder's name spells ("000042" → 42), or nullopt for anything else in jobs_dir.
+std::optional<int> folder_id(const fs::directory_entry& entry) {
+  const std::string name = entry.path().filename().string();
+  if (!entry.is_directory() || name.empty() || name.size() > 9) return std::nullopt;
+  if (!std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; })) return std::nullopt;
+  return std::stoi(name);
+}
+
+std::vector<int> folder_ids(const fs::path& jobs_dir) {
+  std::vector<int> ids;
+  for (const auto& entry : fs::directory_iterator(jobs_dir))
+    if (const auto id = folder_id(entry)) ids.push_back(*id);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+std::optional<std::string> read_whole(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    if (!fs::exists(file)) return std::nullopt;
+    throw geometry::FileError::whole(file, "cannot open");
+  }
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw geometry::FileError::whole(file, "read error");
+  return buffer.str();
+}
+
+nlohmann::json parse_file(const fs::path& file, const std::string& text) {
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw geometry::FileError::at_byte(file, e.byte, std::string("not JSON: ") + e.what());
+  }
+}
+
+JobRecord read_record(const fs::path& folder, int id, const std::string& text) {
+  const fs::path file = folder / record_file;
+  JobRecord record;
+  try {
+    parse_file(file, text).get_to(record);
+  } catch (const geometry::FileError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw geometry::FileError::whole(file, std::string("not a job record: ") + e.what());
+  }
+  if (record.id != id) throw geometry::FileError::whole(file, "holds job " + std::to_string(record.id) + ", not " + std::to_string(id));
+  const fs::path request = folder / request_file;
+  const auto request_text = read_whole(request);
+  if (!request_text) throw geometry::FileError::whole(request, "missing beside " + file.string());
+  record.request = parse_file(request, *request_text);
+  return record;
+}
+
+// A file directly in the job folder; the store's own two files are written by the store only.
+void check_file_name(const std::string& name, bool writing) {
+  const bool reserved = writing && (name == record_file || name == request_file);
+  if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos || reserved)
+    throw std::invalid_argument("\"" + name + "\" is not a job file name (a plain name" +
+                                (writing ? ", not job.json or request.json)" : ")"));
+}
+}  // namespace
+
+JobStore::JobStore(fs::path jobs_dir) : jobs_dir_(std::move(jobs_dir)) {
+  fs::create_directories(jobs_dir_);
+  const auto ids = folder_ids(jobs_dir_);
+  if (!ids.empty()) next_id_ = ids.back() + 1;
+}
+
+fs::path JobStore::folder(int id) const {
+  char name[16];
+  std::snprintf(name, sizeof name, "%06d", id);
+  return jobs_dir_ / name;
+}
+
+std::vector<JobRecord> JobStore::recover() {
+  std::lock_guard lock(mutex_);
+  std::vector<JobRecord> jobs;
+  for (const int id : folder_ids(jobs_dir_)) {
+    next_id_ = std::max(next_id_, id + 1);
+    const fs::path dir = folder(id);
+    const auto text = read_whole(dir / record_file);
+    if (!text) {
+      spdlog::warn("job store: {} has no {} (cmmd stopped while creating the job); skipped", dir.string(), record_file);
+      continue;
+    }
+    JobRecord record = read_record(dir, id, *text);
+    if (is_running(record.state)) {
+      record.reason = std::string("cmmd restarted during ") + to_string(record.state);
+      record.state = JobState::interrupted;
+      record.updated = hal::utc_now();
+      write_atomically(dir / record_file, nlohmann::json(record).dump(2));
+      spdlog::info("job store: job {} interrupted ({})", id, record.reason);
+    }
+    jobs.push_back(std::move(record));
+  }
+  return jobs;
+}
+
+JobRecord JobStore::create(const nlohmann::json& request, std::string name, std::string model) {
+  std::lock_guard lock(mutex_);
+  JobRecord record;
+  // A folder that appeared since the scan (another writer, or an operator) is skipped, not reused.
+  while (!fs::create_directory(folder(next_id_))) ++next_id_;
+  record.id = next_id_++;
+  const fs::path dir = folder(record.id);
+  sync_folder(jobs_dir_);
+  record.name = std::move(name);
+  record.model = std::move(model);
+  record.created = record.updated = hal::utc_now();
+  record.progress.phase = to_string(JobState::queued);
+  record.request = request;
+  write_atomically(dir / request_file, request.dump(2));
+  write_atomically(dir / record_file, nlohmann::json(record).dump(2));
+  return record;
+}
+
+void JobStore::save(const JobRecord& record) {
+  std::lock_guard lock(mutex_);
+  const fs::path dir = folder(record.id);
+  if (!fs::is_directory(dir)) throw geometry::FileError::whole(dir, "no such job folder (job " + std::to_string(record.id) + ")");
+  write_atomically(dir / record_file, nlohmann::json(record).dump(2));
+}
+
+void JobStore::write_file(int id, const std::string& name, std::string_view content) {
+  check_file_name(name, true);
+  std::lock_guard lock(mutex_);
+  const fs::path dir = folder(id);
+  if (!fs::is_directory(dir)) throw geometry::FileError::whole(dir, "no such job folder (job " + std::to_string(id) + ")");
+  write_atomically(dir / name, content);
+}
+
+std::optional<std::string> JobStore::read_file(int id, const std::string& name) const {
+  check_file_name(name, false);
+  std::lock_guard lock(mutex_);
+  return read_whole(folder(id) / name);
+}
+
+}  // namespace cmm::daemon

@@ -1,0 +1,180 @@
+// model.upload's chunk bookkeeping (the partial file's size is the upload's state) and the
+// resolution of model references, with the path checks that keep "file:" inside models_dir.
+#include "daemon/model_store.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+
+#include "daemon/atomic_file.hpp"
+#include "daemon/base64.hpp"
+#include "daemon/rpc_error.hpp"
+#include "daemon/sha256.hpp"
+#include "geometry/file_error.hpp"
+
+namespace cmm::daemon {
+
+namespace fs = std::filesystem;
+
+namespace {
+constexpr std::array<const char*, 4> mesh_extensions = {".stl", ".ply", ".obj", ".off"};
+
+RpcError bad_param(const std::string& path, const std::string& message) {
+  return RpcError(rpc_code::invalid_params, message, {{"path", path}});
+}
+
+RpcError upload_failed(const std::string& message, std::uint64_t expected_offset) {
+  return RpcError(rpc_code::upload_error, message, {{"expected_offset", expected_offset}});
+}
+
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+std::string mesh_extension(const std::string& name) {
+  const std::string ext = lowercase(fs::path(name).extension().string());
+  if (std::find(mesh_extensions.begin(), mesh_extensions.end(), ext) == mesh_extensions.end())
+    throw bad_param("/name", "\"" + name + "\" is not a mesh file (expected .stl, .ply, .obj or .off)");
+  return ext;
+}
+
+std::uint64_t size_or_zero(const fs::path& file) {
+  std::error_code error;
+  const auto size = fs::file_size(file, error);
+  return error ? 0 : size;
+}
+
+[[noreturn]] void fail(const fs::path& file, const std::string& step) {
+  throw geometry::FileError::whole(file, step + ": " + std::strerror(errno));
+}
+
+// Writes `bytes` at `offset` (cutting whatever lay beyond it) and makes it durable.
+void write_part(const fs::path& file, std::uint64_t offset, std::string_view bytes) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) fail(file, "cannot open the partial upload");
+  auto abandon = [&](const std::string& step) {
+    const int error = errno;
+    ::close(fd);
+    errno = error;
+    fail(file, step);
+  };
+  if (::ftruncate(fd, static_cast<off_t>(offset)) != 0) abandon("truncate");
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::pwrite(fd, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) abandon("write");
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0) abandon("fsync");
+  ::close(fd);
+}
+}  // namespace
+
+ModelStore::ModelStore(fs::path state_models_dir, fs::path models_dir, std::uint64_t max_model_bytes)
+    : dir_(std::move(state_models_dir)),
+      partial_dir_(dir_ / ".partial"),
+      models_dir_(std::move(models_dir)),
+      max_model_bytes_(max_model_bytes) {
+  fs::create_directories(partial_dir_);
+}
+
+fs::path ModelStore::stored_file(const std::string& sha256_hex) const {
+  for (const char* ext : mesh_extensions) {
+    const fs::path file = dir_ / (sha256_hex + ext);
+    if (fs::is_regular_file(file)) return file;
+  }
+  return {};
+}
+
+UploadStatus ModelStore::upload(const UploadChunk& chunk) {
+  const std::string sha = lowercase(chunk.sha256_hex);
+  if (!is_sha256_hex(sha)) throw bad_param("/sha256", "sha256 must be 64 hex digits, got \"" + chunk.sha256_hex + "\"");
+  const std::string ext = mesh_extension(chunk.name);
+  const std::string model = "sha256:" + sha;
+  if (chunk.size > max_model_bytes_)
+    throw upload_failed("model of " + std::to_string(chunk.size) + " bytes is over the limit of " +
+                            std::to_string(max_model_bytes_) + " bytes",
+                        0);
+  std::string bytes;
+  try {
+    bytes = decode_base64(chunk.data_base64);
+  } catch (const std::invalid_argument& e) {
+    throw bad_param("/data", e.what());
+  }
+
+  std::lock_guard lock(mutex_);
+  if (!stored_file(sha).empty()) return {model, chunk.size, true};
+  const fs::path part = partial_dir_ / (sha + ".part");
+  const std::uint64_t received = size_or_zero(part);
+  if (chunk.offset != 0 && chunk.offset != received)
+    throw upload_failed("chunk at offset " + std::to_string(chunk.offset) + " out of order: " + std::to_string(received) +
+                            " bytes received so far",
+                        received);
+  if (chunk.offset + bytes.size() > chunk.size) {
+    fs::remove(part);
+    throw upload_failed("chunk at offset " + std::to_string(chunk.offset) + " brings " +
+                            std::to_string(chunk.offset + bytes.size()) + " bytes, more than the declared size " +
+                            std::to_string(chunk.size) + "; upload dropped",
+                        0);
+  }
+  if (chunk.offset == 0 || !bytes.empty()) write_part(part, chunk.offset, bytes);
+  if (chunk.offset == 0) sync_folder(partial_dir_);  // the part file itself survives a power cut
+  const std::uint64_t now_received = chunk.offset + bytes.size();
+  if (now_received < chunk.size) return {model, now_received, false};
+  return finish(sha, ext, chunk.size);
+}
+
+UploadStatus ModelStore::finish(const std::string& sha, const std::string& ext, std::uint64_t size) {
+  const fs::path part = partial_dir_ / (sha + ".part");
+  const std::string actual = sha256_hex_of_file(part);
+  if (actual != sha) {
+    fs::remove(part);
+    throw upload_failed("sha256 mismatch: the " + std::to_string(size) + " bytes received hash to " + actual +
+                            ", not " + sha + "; upload dropped",
+                        0);
+  }
+  const fs::path file = dir_ / (sha + ext);
+  fs::rename(part, file);
+  sync_folder(dir_);
+  sync_folder(partial_dir_);
+  return {"sha256:" + sha, size, true};
+}
+
+fs::path ModelStore::resolve(const std::string& ref) const {
+  std::lock_guard lock(mutex_);
+  if (ref.rfind("sha256:", 0) == 0) {
+    const std::string sha = lowercase(ref.substr(7));
+    if (!is_sha256_hex(sha)) throw bad_param("/model", "\"" + ref + "\": sha256 must be 64 hex digits");
+    const fs::path file = stored_file(sha);
+    if (file.empty()) throw RpcError(rpc_code::not_found, "no uploaded model " + ref, {{"model", ref}});
+    return file;
+  }
+  if (ref.rfind("file:", 0) == 0) return resolve_file(ref.substr(5));
+  throw bad_param("/model", "\"" + ref + "\" is not a model reference (\"sha256:<hex>\" or \"file:<name>\")");
+}
+
+fs::path ModelStore::resolve_file(const std::string& name) const {
+  const std::string ref = "file:" + name;
+  if (models_dir_.empty()) throw bad_param("/model", ref + ": no models_dir is configured");
+  const fs::path relative(name);
+  if (name.empty() || relative.is_absolute()) throw bad_param("/model", ref + ": need a relative name inside models_dir");
+  for (const auto& part : relative)
+    if (part == "..") throw bad_param("/model", ref + ": \"..\" is not allowed");
+  std::error_code error;
+  const fs::path root = fs::weakly_canonical(models_dir_, error);
+  if (error) throw RpcError(rpc_code::not_found, ref + ": models_dir " + models_dir_.string() + " is unreadable", {{"model", ref}});
+  // Symlinks inside models_dir may point anywhere; what counts is where they lead.
+  const fs::path target = fs::weakly_canonical(root / relative, error);
+  const auto [root_end, target_it] = std::mismatch(root.begin(), root.end(), target.begin(), target.end());
+  if (error || root_end != root.end()) throw bad_param("/model", ref + ": leads out of models_dir");
+  if (!fs::is_regular_file(target)) throw RpcError(rpc_code::not_found, ref + ": no such file in " + root.string(), {{"model", ref}});
+  return target;
+}
+
+}  // namespace cmm::daemon

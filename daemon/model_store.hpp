@@ -1,0 +1,60 @@
+// The models cmmd plans from: uploads arriving in base64 chunks (model.upload), kept by content as
+// <state>/models/<sha256><ext>, and the "sha256:…" / "file:…" names jobs use to refer to them.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <mutex>
+#include <string>
+
+namespace cmm::daemon {
+
+// One model.upload call's params (docs/api.md).
+struct UploadChunk {
+  std::string name;        // the client's file name; only its extension is used (.stl .ply .obj .off)
+  std::uint64_t size = 0;  // bytes of the whole model
+  std::string sha256_hex;  // of the whole model
+  std::uint64_t offset = 0;
+  std::string data_base64;  // the bytes at offset
+};
+
+// model.upload's result.
+struct UploadStatus {
+  std::string model;  // "sha256:<hex>"
+  std::uint64_t received = 0;
+  bool complete = false;
+};
+
+class ModelStore {
+ public:
+  static constexpr std::uint64_t default_max_model_bytes = std::uint64_t{512} << 20;
+
+  // `state_models_dir` is created if missing; `models_dir` is the configured read-only folder of
+  // "file:" models (empty: none configured).
+  ModelStore(std::filesystem::path state_models_dir, std::filesystem::path models_dir,
+             std::uint64_t max_model_bytes = default_max_model_bytes);
+
+  // Takes one chunk. Chunks come in order (offset = bytes received so far; offset 0 starts over);
+  // the received bytes live in .partial/<sha>.part, durable before this returns, so an upload goes
+  // on after a restart. The last chunk checks the sha256 and moves the file in place. Throws
+  // RpcError: upload_error (data.expected_offset) for an out-of-order chunk, a size over the limit,
+  // more bytes than `size` or a sha256 mismatch (the partial data is then dropped); invalid_params
+  // (data.path) for a bad name, digest or base64.
+  UploadStatus upload(const UploadChunk& chunk);
+
+  // The file a job's "model" names: "sha256:<hex>" → the stored upload; "file:<name>" → a file
+  // under models_dir. Throws RpcError: invalid_params with data.path "/model" for a malformed ref,
+  // an absolute path, "..", or a name whose symlinks lead out of models_dir; not_found when absent.
+  std::filesystem::path resolve(const std::string& ref) const;
+
+ private:
+  std::filesystem::path stored_file(const std::string& sha256_hex) const;  // empty if not stored
+  std::filesystem::path resolve_file(const std::string& name) const;
+  UploadStatus finish(const std::string& sha256_hex, const std::string& extension, std::uint64_t size);
+
+  std::filesystem::path dir_, partial_dir_, models_dir_;
+  std::uint64_t max_model_bytes_;
+  mutable std::mutex mutex_;
+};
+
+}  // namespace cmm::daemon

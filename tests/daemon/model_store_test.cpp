@@ -1,0 +1,229 @@
+// The model store against real files: a real mesh uploaded in uneven chunks, every refusal with the
+// code and data a client acts on, an upload resumed by a new store on the same folder, and the
+// "file:" references that must not leave models_dir.
+#include "daemon/model_store.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "daemon/base64.hpp"
+#include "daemon/rpc_error.hpp"
+#include "daemon/sha256.hpp"
+#include "fresh_folder.hpp"
+
+namespace cmm::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+std::string read_all(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+const fs::path sample = fs::path(CMMD_SOURCE_DIR) / "config/samples/case3_block.ply";
+
+struct Upload {
+  std::string bytes = read_all(sample);
+  std::string sha = sha256_hex_of_file(sample);
+  std::string name = "Case3_Block.PLY";
+
+  UploadChunk chunk(std::uint64_t offset, std::uint64_t length) const {
+    return {name, bytes.size(), sha, offset, encode_base64(std::string_view(bytes).substr(offset, length))};
+  }
+};
+
+// Runs `call`, which must throw RpcError `code`; returns it for a closer look.
+template <typename Call>
+RpcError rpc_error_of(Call call, int code) {
+  try {
+    call();
+  } catch (const RpcError& e) {
+    EXPECT_EQ(e.code(), code) << e.what();
+    return e;
+  }
+  ADD_FAILURE() << "no RpcError";
+  return RpcError(0, "none");
+}
+
+std::size_t files_in(const fs::path& dir) {
+  return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+TEST(Base64, RoundTripsEveryLengthAndRefusesWhatIsNotBase64) {
+  std::string bytes;
+  for (int i = 0; i < 300; ++i) {
+    EXPECT_EQ(decode_base64(encode_base64(bytes)), bytes) << "length " << i;
+    bytes += static_cast<char>(i * 37);
+  }
+  EXPECT_EQ(encode_base64("cmm"), "Y21t");
+  EXPECT_EQ(decode_base64("Y20="), "cm");
+  EXPECT_EQ(decode_base64("Yw=="), "c");
+  for (const char* bad : {"Y21", "Y2 t", "Y21t\n", "Y=0t", "Y21-", "Yw=a", "===="}) {
+    EXPECT_THROW(decode_base64(bad), std::invalid_argument) << bad;
+  }
+  try {
+    decode_base64("Y21tY2*t");
+    FAIL() << "'*' was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("'*' at position 6"));
+  }
+}
+
+TEST(Sha256, MatchesTheFipsDigests) {
+  Sha256 empty;
+  EXPECT_EQ(empty.hex_digest(), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  Sha256 abc;
+  abc.update("a");
+  abc.update("bc");
+  EXPECT_EQ(abc.hex_digest(), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+}
+
+TEST(ModelStore, UploadsARealMeshInUnevenChunks) {
+  const fs::path dir = fresh_folder("models-chunks");
+  ModelStore store(dir / "models", "");
+  const Upload up;
+  const std::uint64_t lengths[] = {1, 4095, 100000, 3, 250001};
+  std::uint64_t offset = 0;
+  for (const auto length : lengths) {
+    const UploadStatus status = store.upload(up.chunk(offset, length));
+    offset += length;
+    EXPECT_EQ(status.received, offset);
+    EXPECT_FALSE(status.complete);
+    EXPECT_EQ(status.model, "sha256:" + up.sha);
+  }
+  const UploadStatus last = store.upload(up.chunk(offset, up.bytes.size() - offset));
+  EXPECT_TRUE(last.complete);
+  EXPECT_EQ(last.received, up.bytes.size());
+  const fs::path stored = dir / "models" / (up.sha + ".ply");  // the extension lowercased
+  EXPECT_EQ(read_all(stored), up.bytes);
+  EXPECT_EQ(store.resolve("sha256:" + up.sha), stored);
+  EXPECT_EQ(files_in(dir / "models" / ".partial"), 0u);
+}
+
+TEST(ModelStore, AWrongSha256IsRefusedAndNothingIsStored) {
+  const fs::path dir = fresh_folder("models-wrong-sha");
+  ModelStore store(dir / "models", "");
+  Upload up;
+  up.sha = std::string(64, 'a');
+  store.upload(up.chunk(0, 1000));
+  const RpcError e = rpc_error_of([&] { store.upload(up.chunk(1000, up.bytes.size() - 1000)); }, rpc_code::upload_error);
+  EXPECT_THAT(e.what(), HasSubstr("sha256 mismatch"));
+  EXPECT_EQ(e.data().at("expected_offset"), 0);
+  EXPECT_EQ(files_in(dir / "models"), 1u);  // .partial only
+  EXPECT_EQ(files_in(dir / "models" / ".partial"), 0u);
+  rpc_error_of([&] { store.resolve("sha256:" + up.sha); }, rpc_code::not_found);
+}
+
+TEST(ModelStore, AChunkOutOfOrderGetsTheExpectedOffset) {
+  const fs::path dir = fresh_folder("models-order");
+  ModelStore store(dir / "models", "");
+  const Upload up;
+  store.upload(up.chunk(0, 5000));
+  RpcError e = rpc_error_of([&] { store.upload(up.chunk(6000, 10)); }, rpc_code::upload_error);
+  EXPECT_EQ(e.data().at("expected_offset"), 5000);
+  e = rpc_error_of([&] { store.upload(up.chunk(4000, 10)); }, rpc_code::upload_error);  // a repeat
+  EXPECT_EQ(e.data().at("expected_offset"), 5000);
+  // Nothing was lost by the refusals: the upload goes on where it was.
+  EXPECT_EQ(store.upload(up.chunk(5000, 10)).received, 5010u);
+  // A first chunk starts over.
+  EXPECT_EQ(store.upload(up.chunk(0, 7)).received, 7u);
+  e = rpc_error_of([&] { store.upload(up.chunk(5010, 10)); }, rpc_code::upload_error);
+  EXPECT_EQ(e.data().at("expected_offset"), 7);
+}
+
+TEST(ModelStore, AnUploadGoesOnAfterARestart) {
+  const fs::path dir = fresh_folder("models-resume");
+  const Upload up;
+  {
+    ModelStore store(dir / "models", "");
+    store.upload(up.chunk(0, 200000));
+  }
+  ModelStore store(dir / "models", "");
+  const RpcError e = rpc_error_of([&] { store.upload(up.chunk(300000, 10)); }, rpc_code::upload_error);
+  EXPECT_EQ(e.data().at("expected_offset"), 200000);
+  const UploadStatus status = store.upload(up.chunk(200000, up.bytes.size() - 200000));
+  EXPECT_TRUE(status.complete);
+  EXPECT_EQ(read_all(store.resolve(status.model)), up.bytes);
+}
+
+TEST(ModelStore, AModelAlreadyStoredCompletesAtOnce) {
+  const fs::path dir = fresh_folder("models-duplicate");
+  ModelStore store(dir / "models", "");
+  const Upload up;
+  ASSERT_TRUE(store.upload(up.chunk(0, up.bytes.size())).complete);
+  UploadChunk empty = up.chunk(0, 0);
+  const UploadStatus again = store.upload(empty);
+  EXPECT_TRUE(again.complete);
+  EXPECT_EQ(again.received, up.bytes.size());
+  EXPECT_EQ(files_in(dir / "models"), 2u);  // the model and .partial
+}
+
+TEST(ModelStore, RefusesBadBase64BadNamesBadDigestsAndOversizedModels) {
+  const fs::path dir = fresh_folder("models-refusals");
+  const Upload up;
+  ModelStore store(dir / "models", "", 100000);
+  UploadChunk chunk = up.chunk(0, 10);
+  chunk.size = 1000;
+  chunk.data_base64 = "Y21t!!!!";
+  RpcError e = rpc_error_of([&] { store.upload(chunk); }, rpc_code::invalid_params);
+  EXPECT_EQ(e.data().at("path"), "/data");
+  EXPECT_THAT(e.what(), HasSubstr("base64"));
+
+  chunk = up.chunk(0, 10);
+  chunk.name = "part.step";
+  e = rpc_error_of([&] { store.upload(chunk); }, rpc_code::invalid_params);
+  EXPECT_EQ(e.data().at("path"), "/name");
+  EXPECT_THAT(e.what(), HasSubstr("part.step"));
+  chunk.name = "ply";  // no extension at all
+  rpc_error_of([&] { store.upload(chunk); }, rpc_code::invalid_params);
+
+  chunk = up.chunk(0, 10);
+  chunk.sha256_hex = "abc";
+  e = rpc_error_of([&] { store.upload(chunk); }, rpc_code::invalid_params);
+  EXPECT_EQ(e.data().at("path"), "/sha256");
+
+  e = rpc_error_of([&] { store.upload(up.chunk(0, 10)); }, rpc_code::upload_error);  // 499587 > 100000
+  EXPECT_THAT(e.what(), HasSubstr("limit"));
+
+  chunk = up.chunk(0, 10);
+  chunk.size = 5;  // more bytes than declared
+  rpc_error_of([&] { store.upload(chunk); }, rpc_code::upload_error);
+  EXPECT_EQ(files_in(dir / "models"), 1u);
+  EXPECT_EQ(files_in(dir / "models" / ".partial"), 0u);
+}
+
+TEST(ModelStore, ResolvesFilesInsideModelsDirOnly) {
+  const fs::path dir = fresh_folder("models-resolve");
+  const fs::path models = dir / "library";
+  fs::create_directories(models / "blocks");
+  std::ofstream(models / "blocks" / "a.stl") << "solid a\nendsolid a\n";
+  std::ofstream(dir / "secret.stl") << "outside\n";
+  fs::create_symlink(dir / "secret.stl", models / "escape.stl");
+  fs::create_symlink(models / "blocks" / "a.stl", models / "alias.stl");
+  ModelStore store(dir / "models", models);
+
+  EXPECT_EQ(store.resolve("file:blocks/a.stl"), fs::canonical(models / "blocks" / "a.stl"));
+  EXPECT_EQ(store.resolve("file:alias.stl"), fs::canonical(models / "blocks" / "a.stl"));  // a link that stays inside
+  const std::vector<std::string> refused = {"file:../secret.stl", "file:blocks/../../secret.stl",
+                                           "file:" + (dir / "secret.stl").string(), "file:escape.stl", "file:",
+                                           "model.stl", "sha256:xyz"};
+  for (const std::string& ref : refused) {
+    const RpcError e = rpc_error_of([&] { store.resolve(ref); }, rpc_code::invalid_params);
+    EXPECT_EQ(e.data().at("path"), "/model") << ref;
+  }
+  rpc_error_of([&] { store.resolve("file:blocks/missing.stl"); }, rpc_code::not_found);
+  rpc_error_of([&] { store.resolve("file:blocks"); }, rpc_code::not_found);  // a folder is no model
+  rpc_error_of([&] { store.resolve("sha256:" + std::string(64, '0')); }, rpc_code::not_found);
+
+  ModelStore without(dir / "models", "");
+  rpc_error_of([&] { without.resolve("file:blocks/a.stl"); }, rpc_code::invalid_params);
+}
+
+}  // namespace
+}  // namespace cmm::daemon
