@@ -1,0 +1,186 @@
+#include "daemon/json_rpc.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace cmm::daemon {
+
+namespace {
+
+using nlohmann::json;
+
+bool usable_id(const json& request) {
+  if (!request.is_object()) return false;
+  const auto it = request.find("id");
+  return it != request.end() && (it->is_string() || it->is_number() || it->is_null());
+}
+
+json result_response(const json& id, json result) {
+  return {{"jsonrpc", "2.0"}, {"result", std::move(result)}, {"id", id}};
+}
+
+RpcError invalid_request(const std::string& why) { return RpcError(rpc_code::invalid_request, "invalid request: " + why); }
+
+// What makes a request invalid (spec §4, §5.1), or "" when it is well formed.
+std::string request_problem(const json& request) {
+  if (!request.is_object()) return "a request must be a JSON object";
+  if (request.contains("id") && !usable_id(request)) return "\"id\" must be a string, a number or null";
+  const auto version = request.find("jsonrpc");
+  if (version == request.end() || *version != "2.0") return "\"jsonrpc\" must be \"2.0\"";
+  const auto method = request.find("method");
+  if (method == request.end() || !method->is_string()) return "\"method\" must be a string";
+  const auto params = request.find("params");
+  if (params != request.end() && !params->is_object() && !params->is_array())
+    return "\"params\" must be an object or an array";
+  return {};
+}
+
+}  // namespace
+
+std::vector<std::string> RpcContext::subscribe(const std::vector<std::string>& topics) {
+  std::lock_guard lock(topics_mutex_);
+  topics_.insert(topics.begin(), topics.end());
+  return {topics_.begin(), topics_.end()};
+}
+
+bool RpcContext::subscribed(const std::string& topic) const {
+  std::lock_guard lock(topics_mutex_);
+  return topics_.count(topic) != 0;
+}
+
+void RpcDispatcher::add(std::string method, MethodSpec spec) {
+  if (!spec.handler) throw std::logic_error("JSON-RPC method \"" + method + "\" registered without a handler");
+  const auto [it, added] = methods_.emplace(method, std::move(spec));
+  if (!added) throw std::logic_error("JSON-RPC method \"" + method + "\" registered twice");
+}
+
+std::vector<std::string> RpcDispatcher::methods() const {
+  std::vector<std::string> names;
+  for (const auto& [name, spec] : methods_) names.push_back(name);
+  return names;
+}
+
+bool RpcDispatcher::is_slow(const json& message) const {
+  const auto slow = [this](const json& request) {
+    if (!request.is_object()) return false;
+    const auto method = request.find("method");
+    if (method == request.end() || !method->is_string()) return false;
+    const auto it = methods_.find(method->get_ref<const std::string&>());
+    return it != methods_.end() && it->second.slow;
+  };
+  if (message.is_array()) return std::any_of(message.begin(), message.end(), slow);
+  return slow(message);
+}
+
+json RpcDispatcher::handle_one(const json& request, RpcContext& ctx, bool& reply) const {
+  // An invalid request is answered even without an id (spec §7: [1,2,3] gets three errors).
+  reply = true;
+  const json id = usable_id(request) ? request["id"] : json(nullptr);
+  if (const std::string problem = request_problem(request); !problem.empty())
+    return error_response(id, invalid_request(problem));
+  reply = request.contains("id");
+
+  const auto& method = request["method"].get_ref<const std::string&>();
+  const auto it = methods_.find(method);
+  if (it == methods_.end())
+    return error_response(id, RpcError(rpc_code::method_not_found, "method \"" + method + "\" not found", {{"method", method}}));
+  const MethodSpec& spec = it->second;
+  if (ctx.role() < spec.role)
+    return error_response(id, RpcError(rpc_code::unauthorized,
+                                       method + " needs role " + to_string(spec.role) + ", this connection has " +
+                                           to_string(ctx.role()),
+                                       {{"needed", to_string(spec.role)}}));
+  const auto params = request.find("params");
+  try {
+    return result_response(id, spec.handler(params != request.end() ? *params : json::object(), ctx));
+  } catch (const RpcError& e) {
+    return error_response(id, e);
+  } catch (const std::exception& e) {
+    spdlog::warn("JSON-RPC {} from {} failed: {}", method, ctx.peer(), e.what());
+    return error_response(id, RpcError(rpc_code::internal_error, e.what()));
+  } catch (...) {
+    spdlog::warn("JSON-RPC {} from {} failed with a non-standard exception", method, ctx.peer());
+    return error_response(id, RpcError(rpc_code::internal_error, method + " failed"));
+  }
+}
+
+std::optional<json> RpcDispatcher::handle(const json& message, RpcContext& ctx) const {
+  bool reply = false;
+  if (!message.is_array()) {
+    json response = handle_one(message, ctx, reply);
+    return reply ? std::optional<json>(std::move(response)) : std::nullopt;
+  }
+  if (message.empty()) return error_response(nullptr, invalid_request("an empty batch"));
+  json responses = json::array();
+  for (const json& request : message) {
+    json response = handle_one(request, ctx, reply);
+    if (reply) responses.push_back(std::move(response));
+  }
+  if (responses.empty()) return std::nullopt;
+  return responses;
+}
+
+std::optional<std::string> RpcDispatcher::handle_line(std::string_view line, RpcContext& ctx) const {
+  json message;
+  try {
+    message = parse_message(line);
+  } catch (const RpcError& e) {
+    return to_wire(error_response(nullptr, e));
+  }
+  const auto response = handle(message, ctx);
+  if (!response) return std::nullopt;
+  return to_wire(*response);
+}
+
+json parse_message(std::string_view line, int max_depth) {
+  int depth = 0;
+  bool in_string = false, escaped = false;
+  for (const char c : line) {
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth)
+        throw RpcError(rpc_code::parse_error, "parse error: nesting deeper than " + std::to_string(max_depth));
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  try {
+    return json::parse(line);
+  } catch (const json::parse_error& e) {
+    std::string what = e.what();
+    if (const auto end = what.find("] "); what.rfind("[json.exception", 0) == 0 && end != std::string::npos)
+      what.erase(0, end + 2);
+    throw RpcError(rpc_code::parse_error, what, {{"byte", e.byte}});
+  }
+}
+
+json error_response(const json& id, const RpcError& error) {
+  json body = {{"code", error.code()}, {"message", error.what()}};
+  if (!error.data().is_null()) body["data"] = error.data();
+  return {{"jsonrpc", "2.0"}, {"error", std::move(body)}, {"id", id}};
+}
+
+std::optional<json> refuse_message(const json& message, const RpcError& error) {
+  if (!message.is_array()) {
+    if (!usable_id(message)) return std::nullopt;
+    return error_response(message["id"], error);
+  }
+  json responses = json::array();
+  for (const json& request : message)
+    if (usable_id(request)) responses.push_back(error_response(request["id"], error));
+  if (responses.empty()) return std::nullopt;
+  return responses;
+}
+
+std::size_t message_size(const json& message) { return message.is_array() ? std::max<std::size_t>(message.size(), 1) : 1; }
+
+std::string to_wire(const json& value) { return value.dump(-1, ' ', false, json::error_handler_t::replace); }
+
+}  // namespace cmm::daemon

@@ -1,0 +1,98 @@
+// cmmd's JSON-RPC transport: newline-delimited JSON over TCP and a Unix socket on the caller's
+// io_context, with the limits and access rules of docs/api.md, and notifications to subscribers.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <asio/io_context.hpp>
+#include <asio/ip/tcp.hpp>
+#include <asio/local/stream_protocol.hpp>
+#include <asio/thread_pool.hpp>
+#include <nlohmann/json.hpp>
+
+#include "daemon/json_rpc.hpp"
+
+namespace cmm::daemon {
+
+struct AccessToken {
+  std::string token;
+  Role role = Role::observer;
+};
+
+struct ServerOptions {
+  std::string tcp_bind = "127.0.0.1";       // an address or a host name
+  int tcp_port = 7620;                       // 0: ephemeral (see RpcServer::tcp_port)
+  bool tcp_enabled = true;
+  std::string unix_path;                     // empty: no Unix socket
+  unsigned unix_mode = 0660;
+  std::size_t max_request_bytes = 4u << 20;  // one line, without its newline
+  int max_connections = 256;
+  int max_pending_requests = 64;             // slow requests running or queued, per connection
+  double idle_timeout_s = 30;                // a partial line then silence this long: closed
+  std::vector<AccessToken> tokens;           // empty: TCP is operator, and only loopback binds
+  int worker_threads = 4;                    // for slow methods
+  std::size_t max_unsent_bytes = 64u << 20;  // a subscriber further behind than this is dropped
+  std::vector<std::string> topics = {"job", "machine"};  // what server.subscribe accepts
+};
+
+class RpcSession;
+
+// Runs on one thread: the one that runs the io_context (cmmd's main thread). Slow methods run on
+// its own worker pool. Registers the builtins server.auth and server.subscribe in the dispatcher,
+// which must outlive it and have all methods added before start().
+class RpcServer {
+ public:
+  RpcServer(asio::io_context& io, RpcDispatcher& dispatcher, ServerOptions options);
+  ~RpcServer();  // stop()
+  RpcServer(const RpcServer&) = delete;
+  RpcServer& operator=(const RpcServer&) = delete;
+
+  // Binds and listens; throws std::runtime_error saying what and where (a non-loopback bind
+  // without tokens, a port in use, a Unix path that is not a socket or is served by another).
+  void start();
+  int tcp_port() const { return tcp_port_; }  // the bound port, also when options asked for 0
+
+  // Thread-safe: sends {"method", "params"} to every connection subscribed to topic.
+  void notify(const std::string& topic, const std::string& method, const nlohmann::json& params);
+  // Thread-safe (SIGHUP): new connections and later server.auth calls use these; roles already
+  // granted stay.
+  void set_tokens(std::vector<AccessToken> tokens);
+  // On the io thread (or with the io_context not running): closes the listeners and every
+  // connection, removes the Unix socket, and joins the workers (after running slow methods return).
+  void stop();
+  std::size_t connection_count() const;  // thread-safe
+
+ private:
+  void listen_tcp();
+  void listen_unix();
+  void accept_tcp();
+  void accept_unix();
+  template <typename Socket>
+  void admit(Socket socket, std::string peer, Role role);
+  nlohmann::json auth(const nlohmann::json& params, RpcContext& ctx);
+  nlohmann::json subscribe(const nlohmann::json& params, RpcContext& ctx);
+
+  asio::io_context& io_;
+  RpcDispatcher& dispatcher_;
+  const ServerOptions options_;
+  std::optional<asio::ip::tcp::acceptor> tcp_acceptor_;
+  std::optional<asio::local::stream_protocol::acceptor> unix_acceptor_;
+  std::optional<asio::thread_pool> workers_;
+  int tcp_port_ = 0;
+  bool started_ = false, stopped_ = false, unix_bound_ = false;
+  std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);  // accept handlers outliving us see it gone
+  std::uint64_t next_id_ = 1;
+
+  mutable std::mutex sessions_mutex_;
+  std::map<std::uint64_t, std::shared_ptr<RpcSession>> sessions_;
+  mutable std::mutex tokens_mutex_;
+  std::vector<AccessToken> tokens_;
+};
+
+}  // namespace cmm::daemon

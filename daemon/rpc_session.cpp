@@ -1,0 +1,228 @@
+#include "daemon/rpc_session.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <utility>
+
+#include <asio/post.hpp>
+#include <asio/write.hpp>
+
+namespace cmm::daemon {
+
+namespace {
+
+constexpr std::size_t kLinesPerWrite = 64;
+const char kNewline = '\n';
+
+std::chrono::steady_clock::duration seconds(double s) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+}
+
+}  // namespace
+
+RpcSession::RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, SessionLimits limits,
+                       const RpcDispatcher& dispatcher, asio::thread_pool& workers, OnClosed on_closed)
+    : socket_(std::move(socket)),
+      context_(connection_id, std::move(peer), role),
+      limits_(limits),
+      dispatcher_(dispatcher),
+      workers_(workers),
+      on_closed_(std::move(on_closed)),
+      timer_(socket_.get_executor()) {}
+
+void RpcSession::start() {
+  spdlog::info("connection {} opened: {} (role {})", context_.connection_id(), context_.peer(), to_string(context_.role()));
+  read();
+}
+
+void RpcSession::refuse(const RpcError& error) {
+  spdlog::warn("connection from {} refused: {}", context_.peer(), error.what());
+  close_after_write(error);
+}
+
+void RpcSession::read() {
+  socket_.async_read_some(asio::buffer(read_buffer_),
+                          [self = shared_from_this()](const asio::error_code& ec, std::size_t n) { self->on_read(ec, n); });
+}
+
+void RpcSession::on_read(const asio::error_code& ec, std::size_t n) {
+  if (closed_) return;
+  if (closing_) {  // the error line is out; what the peer still sends is discarded until it closes
+    if (ec) return close(close_reason_);
+    return read();
+  }
+  if (ec) {
+    if (ec != asio::error::eof) return close("read failed: " + ec.message());
+    if (!inbox_.empty()) spdlog::debug("connection {}: {} bytes after the last newline dropped", context_.connection_id(), inbox_.size());
+    peer_done_ = true;
+    ++timer_generation_;
+    timer_.cancel();
+    return finish_if_done();
+  }
+  inbox_.append(read_buffer_.data(), n);
+  const RpcError too_large(rpc_code::request_too_large,
+                           "request over max_request_bytes (" + std::to_string(limits_.max_request_bytes) + " bytes)",
+                           {{"max_request_bytes", limits_.max_request_bytes}});
+  std::size_t begin = 0;
+  for (auto end = inbox_.find(kNewline, scanned_); end != std::string::npos; end = inbox_.find(kNewline, begin)) {
+    std::string_view line(inbox_.data() + begin, end - begin);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    begin = end + 1;
+    if (line.size() > limits_.max_request_bytes) return close_after_write(too_large);
+    on_line(line);
+    if (closed_ || closing_) return;
+  }
+  inbox_.erase(0, begin);
+  scanned_ = inbox_.size();
+  if (inbox_.size() > limits_.max_request_bytes + 1) return close_after_write(too_large);  // + 1: a '\r'
+  if (unsent_bytes_ > limits_.max_request_bytes) {
+    // The peer sends faster than it reads its replies: stop reading until it catches up.
+    read_paused_ = true;
+    ++timer_generation_;
+    timer_.cancel();
+    return;
+  }
+  arm_idle_timer();
+  read();
+}
+
+void RpcSession::on_line(std::string_view line) {
+  if (line.find_first_not_of(" \t") == std::string_view::npos) return;
+  nlohmann::json message;
+  try {
+    message = parse_message(line);
+  } catch (const RpcError& e) {
+    spdlog::debug("connection {}: {}", context_.connection_id(), e.what());
+    return reply(error_response(nullptr, e));
+  }
+  if (!dispatcher_.is_slow(message)) return reply(dispatcher_.handle(message, context_));
+  const std::size_t count = message_size(message);
+  if (pending_ + count > limits_.max_pending_requests) {
+    spdlog::debug("connection {}: over max_pending_requests ({})", context_.connection_id(), limits_.max_pending_requests);
+    return reply(refuse_message(
+        message, RpcError(rpc_code::too_many_pending,
+                          "more than max_pending_requests (" + std::to_string(limits_.max_pending_requests) +
+                              ") requests pending on this connection",
+                          {{"max_pending_requests", limits_.max_pending_requests}})));
+  }
+  run_slow(std::move(message), count);
+}
+
+void RpcSession::run_slow(nlohmann::json message, std::size_t count) {
+  pending_ += count;
+  asio::post(workers_, [self = shared_from_this(), message = std::move(message), count] {
+    std::optional<std::string> line;
+    if (const auto response = self->dispatcher_.handle(message, self->context_)) line = to_wire(*response);
+    asio::post(self->socket_.get_executor(), [self, line = std::move(line), count]() mutable {
+      self->pending_ -= count;
+      if (line && !self->closing_) self->queue(std::make_shared<const std::string>(std::move(*line)));
+      self->finish_if_done();
+    });
+  });
+}
+
+void RpcSession::reply(const std::optional<nlohmann::json>& response) {
+  if (response) queue(std::make_shared<const std::string>(to_wire(*response)));
+}
+
+void RpcSession::send_notification(std::shared_ptr<const std::string> line) {
+  if (closed_ || closing_) return;
+  if (unsent_bytes_ + line->size() + 1 > limits_.max_unsent_bytes) {
+    spdlog::warn("connection {} ({}) dropped: {} bytes unsent, over max_unsent_bytes ({}); a slow consumer of notifications",
+                 context_.connection_id(), context_.peer(), unsent_bytes_, limits_.max_unsent_bytes);
+    return close("a slow consumer of notifications");
+  }
+  queue(std::move(line));
+}
+
+void RpcSession::queue(std::shared_ptr<const std::string> line) {
+  if (closed_) return;
+  unsent_bytes_ += line->size() + 1;
+  outbox_.push_back(std::move(line));
+  if (!writing_) write();
+}
+
+void RpcSession::write() {
+  writing_ = true;
+  write_buffers_.clear();
+  std::size_t lines = 0, bytes = 0;
+  for (; lines < outbox_.size() && lines < kLinesPerWrite; ++lines) {
+    write_buffers_.push_back(asio::buffer(*outbox_[lines]));
+    write_buffers_.push_back(asio::buffer(&kNewline, 1));
+    bytes += outbox_[lines]->size() + 1;
+  }
+  asio::async_write(socket_, write_buffers_,
+                    [self = shared_from_this(), lines, bytes](const asio::error_code& ec, std::size_t) {
+                      self->on_written(ec, lines, bytes);
+                    });
+}
+
+void RpcSession::on_written(const asio::error_code& ec, std::size_t lines, std::size_t bytes) {
+  writing_ = false;
+  if (closed_) return;
+  if (ec) return close("write failed: " + ec.message());
+  outbox_.erase(outbox_.begin(), outbox_.begin() + static_cast<std::ptrdiff_t>(lines));
+  unsent_bytes_ -= bytes;
+  if (read_paused_ && !closing_ && unsent_bytes_ <= limits_.max_request_bytes) {
+    read_paused_ = false;
+    arm_idle_timer();
+    read();
+  }
+  if (!outbox_.empty()) return write();
+  if (closing_) return drain();
+  finish_if_done();
+}
+
+void RpcSession::arm_idle_timer() {
+  const std::uint64_t generation = ++timer_generation_;
+  if (inbox_.empty()) {
+    timer_.cancel();
+    return;
+  }
+  timer_.expires_after(seconds(limits_.idle_timeout_s));
+  timer_.async_wait([self = shared_from_this(), generation](const asio::error_code& ec) {
+    if (ec || self->closed_ || generation != self->timer_generation_) return;
+    self->close("a partial request, then nothing for " + std::to_string(self->limits_.idle_timeout_s) + " s");
+  });
+}
+
+void RpcSession::close_after_write(const RpcError& error) {
+  closing_ = true;
+  close_reason_ = error.what();
+  ++timer_generation_;
+  timer_.cancel();
+  spdlog::debug("connection {}: {}; closing", context_.connection_id(), error.what());
+  reply(error_response(nullptr, error));
+}
+
+void RpcSession::drain() {
+  // Closing with unread input would reset the connection and could destroy the error line in
+  // flight, so: FIN first, then read and discard until the peer closes (or idle_timeout_s).
+  asio::error_code ignored;
+  socket_.shutdown(Socket::shutdown_send, ignored);
+  const std::uint64_t generation = ++timer_generation_;
+  timer_.expires_after(seconds(limits_.idle_timeout_s));
+  timer_.async_wait([self = shared_from_this(), generation](const asio::error_code& ec) {
+    if (!ec && generation == self->timer_generation_) self->close(self->close_reason_);
+  });
+  read();
+}
+
+void RpcSession::finish_if_done() {
+  if (peer_done_ && !closing_ && pending_ == 0 && !writing_ && outbox_.empty()) close("closed by the peer");
+}
+
+void RpcSession::close(const std::string& reason) {
+  if (closed_) return;
+  closed_ = true;
+  ++timer_generation_;
+  timer_.cancel();
+  asio::error_code ignored;
+  socket_.shutdown(Socket::shutdown_both, ignored);
+  socket_.close(ignored);
+  spdlog::info("connection {} closed: {} ({})", context_.connection_id(), context_.peer(), reason);
+  if (on_closed_) std::exchange(on_closed_, nullptr)(context_.connection_id());
+}
+
+}  // namespace cmm::daemon
