@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# Installs the build with DESTDIR into a temporary root and checks what landed there: every file,
+# `systemd-analyze verify` silent on the unit, systemd-sysusers making the cmmd user, and the
+# unit's `systemd-analyze security` exposure at or under the ceiling.
+# Usage: verify_unit.sh CMAKE BUILD_DIR UNIT SYSUSERS_CONF MAX_EXPOSURE [OTHER_INSTALLED_FILE...]
+# (paths as installed, without DESTDIR). Needs no running systemd.
+set -euo pipefail
+
+cmake=$1 build=$2 unit=$3 sysusers=$4 max_exposure=$5
+shift 5
+fail() { echo "verify_unit: $*" >&2; exit 1; }
+
+root=$(mktemp -d "${TMPDIR:-/tmp}/cmmd-root.XXXXXX")
+trap 'rm -rf "$root"' EXIT
+
+out=$(DESTDIR="$root" "$cmake" --install "$build" 2>&1) || { echo "$out"; fail "cmake --install $build failed"; }
+exec_start=$(sed -n 's/^ExecStart=\([^ ]*\).*/\1/p' "$root$unit" 2>/dev/null || true)
+[ -n "$exec_start" ] || fail "no ExecStart= in $root$unit"
+for f in "$unit" "$sysusers" "$exec_start" "$@"; do
+  [ -e "$root$f" ] || fail "cmake --install did not install $f (looked in $root$f)"
+done
+[ -x "$root$exec_start" ] || fail "$exec_start is not executable"
+
+# verify --root resolves every path inside the root, so the root gets what a real system has:
+# the targets a service's default dependencies name, and the system programs (kill) the unit
+# runs. The programs we install must already be there (checked above), never copied from the host.
+host_units=""
+for d in /usr/lib/systemd/system /lib/systemd/system; do
+  [ -e "$d/sysinit.target" ] && { host_units=$d; break; }
+done
+[ -n "$host_units" ] || fail "no systemd units on this machine (install the systemd package)"
+mkdir -p "$root/usr/lib/systemd/system"
+for t in sysinit.target basic.target shutdown.target; do
+  cp "$host_units/$t" "$root/usr/lib/systemd/system/"
+done
+for program in $(sed -n 's/^Exec[A-Za-z]*=[-@:+!]*\([^ ]*\).*/\1/p' "$root$unit"); do
+  if [ ! -e "$root$program" ]; then
+    [ -x "$program" ] || fail "$unit runs $program, which neither the install nor this machine has"
+    mkdir -p "$root$(dirname "$program")"
+    cp -L "$program" "$root$program"
+  fi
+done
+
+# verify exits 0 on warnings, so any output at all is a failure.
+out=$(systemd-analyze verify --root="$root" "$root$unit" 2>&1) || { echo "$out"; fail "systemd-analyze verify failed"; }
+[ -z "$out" ] || { echo "$out"; fail "systemd-analyze verify is not silent on $unit"; }
+
+mkdir -p "$root/etc"
+out=$(systemd-sysusers --root="$root" "$root$sysusers" 2>&1) || { echo "$out"; fail "systemd-sysusers failed on $sysusers"; }
+grep -q '^cmmd:x:[0-9]*:[0-9]*:[^:]*:/var/lib/cmmd:[^:]*nologin$' "$root/etc/passwd" \
+  || { echo "$out"; cat "$root/etc/passwd"; fail "systemd-sysusers made no cmmd user from $sysusers"; }
+grep -q '^cmmd:x:' "$root/etc/group" || fail "systemd-sysusers made no cmmd group from $sysusers"
+
+report=$(systemd-analyze security --offline=yes --root="$root" "$root$unit" 2>"$root/security.err") \
+  || { echo "$report"; cat "$root/security.err"; fail "systemd-analyze security failed"; }
+[ ! -s "$root/security.err" ] || { cat "$root/security.err"; fail "systemd-analyze security complained"; }
+exposure=$(sed -n 's/.*Overall exposure level for [^:]*: \([0-9.]*\).*/\1/p' <<<"$report")
+[ -n "$exposure" ] || { echo "$report"; fail "no overall exposure in systemd-analyze security's report"; }
+echo "$report" | grep -v '^✓'
+if awk -v e="$exposure" -v m="$max_exposure" 'BEGIN { exit !(e > m) }'; then
+  fail "exposure $exposure is over the ceiling $max_exposure"
+fi
+echo "verify_unit: verify silent, cmmd user made, exposure $exposure (ceiling $max_exposure)"
