@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the build with DESTDIR into a temporary root and checks what landed there: every file,
-# `systemd-analyze verify` silent on the unit, systemd-sysusers making the cmmd user, and the
-# unit's `systemd-analyze security` exposure at or under the ceiling.
+# `systemd-analyze verify` silent on the unit, systemd-sysusers making the cmmd user, the unit's
+# `systemd-analyze security` exposure at or under the ceiling, and a reinstall keeping the config.
 # Usage: verify_unit.sh CMAKE BUILD_DIR UNIT SYSUSERS_CONF MAX_EXPOSURE [OTHER_INSTALLED_FILE...]
 # (paths as installed, without DESTDIR). Needs no running systemd.
 set -euo pipefail
@@ -16,7 +16,9 @@ trap 'rm -rf "$root"' EXIT
 out=$(DESTDIR="$root" "$cmake" --install "$build" 2>&1) || { echo "$out"; fail "cmake --install $build failed"; }
 exec_start=$(sed -n 's/^ExecStart=\([^ ]*\).*/\1/p' "$root$unit" 2>/dev/null || true)
 [ -n "$exec_start" ] || fail "no ExecStart= in $root$unit"
-for f in "$unit" "$sysusers" "$exec_start" "$@"; do
+config=$(sed -n 's/^ExecStart=.* --config \([^ ]*\).*/\1/p' "$root$unit")
+[ -n "$config" ] || fail "ExecStart= in $unit names no --config"
+for f in "$unit" "$sysusers" "$exec_start" "$config" "$@"; do
   [ -e "$root$f" ] || fail "cmake --install did not install $f (looked in $root$f)"
 done
 [ -x "$root$exec_start" ] || fail "$exec_start is not executable"
@@ -60,4 +62,9 @@ echo "$report" | grep -v '^✓'
 if awk -v e="$exposure" -v m="$max_exposure" 'BEGIN { exit !(e > m) }'; then
   fail "exposure $exposure is over the ceiling $max_exposure"
 fi
+# A reinstall keeps the site's config.
+echo '{"site": "edited"}' >"$root$config"
+out=$(DESTDIR="$root" "$cmake" --install "$build" 2>&1) || { echo "$out"; fail "second cmake --install failed"; }
+[ "$(cat "$root$config")" = '{"site": "edited"}' ] || fail "a reinstall overwrote the site's $config"
+
 echo "verify_unit: verify silent, cmmd user made, exposure $exposure (ceiling $max_exposure)"
