@@ -1,13 +1,22 @@
 #!/usr/bin/env bash
 # Installs the build with DESTDIR into a temporary root and checks what landed there: every file,
 # `systemd-analyze verify` silent on the unit, systemd-sysusers making the cmmd user, the unit's
-# `systemd-analyze security` exposure at or under the ceiling, and a reinstall keeping the config.
-# Usage: verify_unit.sh CMAKE BUILD_DIR UNIT SYSUSERS_CONF MAX_EXPOSURE [OTHER_INSTALLED_FILE...]
-# (paths as installed, without DESTDIR). Needs no running systemd.
+# `systemd-analyze security` exposure at or under the ceiling with no item failed but the accepted
+# ones, and a reinstall keeping the config. Needs no running systemd.
+# Usage: verify_unit.sh CMAKE BUILD_DIR UNIT SYSUSERS_CONF [OTHER_INSTALLED_FILE...]
+# (paths as installed, without DESTDIR).
 set -euo pipefail
 
-cmake=$1 build=$2 unit=$3 sysusers=$4 max_exposure=$5
-shift 5
+cmake=$1 build=$2 unit=$3 sysusers=$4
+shift 4
+# systemd 252's figure for the unit (docs/systemd.md, Exposure). The items it still fails, each
+# for a reason given there; any other ✗ means a hardening line was lost, even one too light to
+# move the rounded figure.
+max_exposure=1.3
+accepted_failures=(
+  PrivateNetwork= IPAddressDeny= PrivateDevices= DeviceAllow= SupplementaryGroups= UMask=
+  'RestrictAddressFamilies=~AF_(INET|INET6)' 'RestrictAddressFamilies=~AF_UNIX' RootDirectory=/RootImage=
+)
 fail() { echo "verify_unit: $*" >&2; exit 1; }
 
 root=$(mktemp -d "${TMPDIR:-/tmp}/cmmd-root.XXXXXX")
@@ -59,6 +68,9 @@ report=$(systemd-analyze security --offline=yes --root="$root" "$root$unit" 2>"$
 exposure=$(sed -n 's/.*Overall exposure level for [^:]*: \([0-9.]*\).*/\1/p' <<<"$report")
 [ -n "$exposure" ] || { echo "$report"; fail "no overall exposure in systemd-analyze security's report"; }
 echo "$report" | grep -v '^✓'
+while read -r item; do
+  printf '%s\n' "${accepted_failures[@]}" | grep -qxF -- "$item" || fail "systemd-analyze security fails $item"
+done < <(sed -n 's/^✗ \([^ ]*\) .*/\1/p' <<<"$report")
 if awk -v e="$exposure" -v m="$max_exposure" 'BEGIN { exit !(e > m) }'; then
   fail "exposure $exposure is over the ceiling $max_exposure"
 fi
