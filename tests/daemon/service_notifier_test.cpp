@@ -81,6 +81,25 @@ class FakeNotifySocket {
   int fd_ = -1;
 };
 
+// Runs an io_context on its own thread until the end of the scope, so that a failed ASSERT
+// cannot leave the thread joinable.
+class LoopThread {
+ public:
+  explicit LoopThread(asio::io_context& io)
+      : io_(io), work_(asio::make_work_guard(io)), thread_([&io] { io.run(); }) {}
+  ~LoopThread() {
+    io_.stop();
+    thread_.join();
+  }
+  LoopThread(const LoopThread&) = delete;
+  LoopThread& operator=(const LoopThread&) = delete;
+
+ private:
+  asio::io_context& io_;
+  asio::executor_work_guard<asio::io_context::executor_type> work_;
+  std::thread thread_;
+};
+
 // Each test sets the manager's environment itself; this puts the process's back afterwards.
 class ServiceNotifierTest : public ::testing::Test {
  protected:
@@ -146,11 +165,8 @@ TEST_F(ServiceNotifierTest, KicksArriveWhileTheLoopRuns) {
   asio::io_context io;
   ServiceNotifier notifier;
   notifier.start_watchdog(io);
-  auto work = asio::make_work_guard(io);
-  std::thread loop([&io] { io.run(); });
+  const LoopThread loop(io);
   for (int i = 0; i < 3; ++i) EXPECT_EQ(manager.receive(deadline), "WATCHDOG=1") << "kick " << i;
-  io.stop();
-  loop.join();
 }
 
 TEST_F(ServiceNotifierTest, NoKicksWhileTheLoopIsBlocked) {
@@ -158,8 +174,7 @@ TEST_F(ServiceNotifierTest, NoKicksWhileTheLoopIsBlocked) {
   asio::io_context io;
   ServiceNotifier notifier;
   notifier.start_watchdog(io);
-  auto work = asio::make_work_guard(io);
-  std::thread loop([&io] { io.run(); });
+  const LoopThread loop(io);
   ASSERT_EQ(manager.receive(deadline), "WATCHDOG=1");
 
   std::promise<void> entered;
@@ -175,8 +190,6 @@ TEST_F(ServiceNotifierTest, NoKicksWhileTheLoopIsBlocked) {
   EXPECT_EQ(manager.receive(200ms), std::nullopt);
   release.set_value();
   EXPECT_EQ(manager.receive(deadline), "WATCHDOG=1");
-  io.stop();
-  loop.join();
 }
 
 TEST_F(ServiceNotifierTest, StoppedWatchdogSendsNoMoreKicks) {
