@@ -53,6 +53,27 @@ std::vector<int> ids_of(const std::vector<Touch>& planned) {
   return ids;
 }
 
+// Measures a planned feature from its touches' centres: a touch without a result or without contact,
+// or a CompensationError, leaves `r` failed with the reason and nothing measured in it.
+template <typename Result, typename Measure>
+void measure_feature(Result& r, const std::vector<Touch>& planned, const Context& c, Measure measure) {
+  r.status = FeatureStatus::failed;
+  const Centres centres = centres_of(planned, c.touches);
+  if (!centres.failure.empty()) {
+    r.reason = centres.failure;
+    return;
+  }
+  const Result unmeasured = r;
+  try {
+    measure(centres.centres);
+  } catch (const CompensationError& e) {
+    r = unmeasured;
+    r.reason = e.what();
+    return;
+  }
+  r.status = FeatureStatus::measured;
+}
+
 // In M, as compensated: by two touches through the reference point or by the two faces' planes.
 MeasuredPoint measure_in_machine(const geometry::EdgePoint& point, const EdgePlan& plan, const std::vector<Vec3>& centres,
                                  const Context& c) {
@@ -97,24 +118,12 @@ EdgeResult compensate_edge(const geometry::EdgePoint& point, const EdgePlan& pla
   r.touch_ids = ids_of(plan.touches);
   r.reason = plan.reason;
   if (plan.method == EdgeMethod::none) return r;
-  r.status = FeatureStatus::failed;
-  const Centres centres = centres_of(plan.touches, c.touches);
-  if (!centres.failure.empty()) {
-    r.reason = centres.failure;
-    return r;
-  }
-  try {
-    r.machine = measure_in_machine(point, plan, centres.centres, c);
+  measure_feature(r, plan.touches, c, [&](const std::vector<Vec3>& centres) {
+    r.machine = measure_in_machine(point, plan, centres, c);
     r.scan = to_scan_frame(*r.machine, c.T_M_S);
     r.deviation = signed_deviation(r.scan->position, point.position, point.n_up, point.n_down.value_or(Vec3::Zero()),
                                    point.tangent);
-  } catch (const CompensationError& e) {
-    r.machine.reset();
-    r.scan.reset();
-    r.reason = e.what();
-    return r;
-  }
-  r.status = FeatureStatus::measured;
+  });
   return r;
 }
 
@@ -128,34 +137,21 @@ HoleResult compensate_bore(const geometry::Hole& hole, const BorePlan& plan, con
   r.nominal_axis = hole.axis.normalized();
   r.nominal_diameter_mm = 2 * hole.radius;
   if (!plan.planned) return r;
-  r.status = FeatureStatus::failed;
-  const Centres centres = centres_of(plan.touches, c.touches);
-  if (!centres.failure.empty()) {
-    r.reason = centres.failure;
-    return r;
-  }
-  try {
+  measure_feature(r, plan.touches, c, [&](const std::vector<Vec3>& centres) {
     BoreInput in;
     in.hole_id = hole.id;
-    in.centres = centres.centres;
+    in.centres = centres;
     in.axis = c.T_M_S.linear() * r.nominal_axis;
     in.ball_radius_mm = c.options.ball_radius_mm;
     in.trigger_sigma_mm = c.options.trigger_sigma_mm;
     r.machine = measure_bore(in);
     r.scan = to_scan_frame(*r.machine, c.T_M_S);
     for (const MeasuredPoint& p : bore_wall_points(in, *r.machine)) r.wall_points.push_back(to_scan_frame(p, c.T_M_S));
-  } catch (const CompensationError& e) {
-    r.machine.reset();
-    r.scan.reset();
-    r.wall_points.clear();
-    r.reason = e.what();
-    return r;
-  }
-  const Vec3 v = r.scan->centre - r.nominal_centre;
-  r.centre_offset = v - v.dot(r.nominal_axis) * r.nominal_axis;
-  r.centre_deviation_mm = r.centre_offset.norm();
-  r.diameter_deviation_mm = r.scan->diameter_mm - r.nominal_diameter_mm;
-  r.status = FeatureStatus::measured;
+    const Vec3 v = r.scan->centre - r.nominal_centre;
+    r.centre_offset = v - v.dot(r.nominal_axis) * r.nominal_axis;
+    r.centre_deviation_mm = r.centre_offset.norm();
+    r.diameter_deviation_mm = r.scan->diameter_mm - r.nominal_diameter_mm;
+  });
   return r;
 }
 
