@@ -14,17 +14,14 @@
 #include <iterator>
 #include <memory>
 #include <numbers>
-#include <random>
-#include <regex>
 #include <set>
-#include <sstream>
 
 #include "edge_truth.hpp"
 #include "geometry/analytic_parts.hpp"
-#include "geometry/ball_sweep.hpp"
 #include "planner/measured_cloud.hpp"
 #include "planner/result_csv.hpp"
 #include "planner/result_json.hpp"
+#include "true_part_touches.hpp"
 
 namespace cmm::planner {
 namespace {
@@ -38,22 +35,6 @@ constexpr double kRadius = 1.0;
 // DESIGN.md's target for a measured edge point.
 constexpr double kEdgeTolerance = 0.010;
 
-// The scan frame turned and tilted into the machine, as a real registration would leave it.
-Eigen::Isometry3d machine_pose() {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translate(Vec3(250, 300, -20));
-  T.rotate(Eigen::AngleAxisd(30 * deg, Vec3::UnitZ()));
-  T.rotate(Eigen::AngleAxisd(0.5 * deg, Vec3::UnitX()));
-  return T;
-}
-
-geometry::TriangleMesh moved(const geometry::TriangleMesh& mesh, const Eigen::Isometry3d& T) {
-  geometry::TriangleMesh out = mesh;
-  for (Eigen::Index i = 0; i < out.vertices.rows(); ++i)
-    out.vertices.row(i) = (T * Vec3(mesh.vertices.row(i).transpose())).transpose();
-  return out;
-}
-
 struct Scenario {
   std::string name;
   AnalyticPart truth;  // in S; at 0.25 mm, so its circles' chords stay within 2.6 µm of the circles
@@ -62,28 +43,8 @@ struct Scenario {
   Eigen::Isometry3d T_M_S;
   MeasurementPlan plan;
   std::map<int, TouchOutcome> touches;  // from the true part, with trigger noise
-  int swept = 0, missed = 0;
+  int missed = 0;
 };
-
-// Where each planned probe motion's ball first meets the true part in M, plus seeded noise.
-std::map<int, TouchOutcome> touch_true_part(const Scenario& s, int& swept, int& missed) {
-  const geometry::BallSweeper part(moved(s.truth.mesh, s.T_M_S));
-  std::mt19937_64 rng(20260611);
-  std::normal_distribution<double> noise(0, kSigma);
-  std::map<int, TouchOutcome> outcomes;
-  const auto touch = [&](const Touch& t) {
-    ++swept;
-    const auto hit = part.first_hit(t.start, t.direction, t.max_travel_mm, kRadius);
-    missed += !hit;
-    outcomes[t.id] = hit ? TouchOutcome{true, hit->centre + Vec3(noise(rng), noise(rng), noise(rng))}
-                         : TouchOutcome{false, t.start + t.max_travel_mm * t.direction};
-  };
-  for (const EdgePlan& e : s.plan.edges)
-    for (const Touch& t : e.touches) touch(t);
-  for (const BorePlan& b : s.plan.bores)
-    for (const Touch& t : b.touches) touch(t);
-  return outcomes;
-}
 
 // noise_mm 0: the reference is the true part meshed at 1 mm; else that mesh with Gaussian vertex noise.
 // δ is 0.1 mm on an exact reference and 0.2 mm on a noisy one; `window` may change the window options.
@@ -96,7 +57,7 @@ std::unique_ptr<Scenario> make_scenario(const std::string& name, const std::func
   geometry::FeatureModelOptions features;
   features.spacing = 4;
   s->model = geometry::extract_features(s->reference, features);
-  s->T_M_S = machine_pose();
+  s->T_M_S = testing::tilted_machine_pose();
   MachineDescription machine = default_machine();
   machine.tips.front().ball_radius_mm = kRadius;
   machine.tips.front().shaft_length_mm = 60;  // reaches the foot of the block's walls
@@ -105,7 +66,9 @@ std::unique_ptr<Scenario> make_scenario(const std::string& name, const std::func
   options.touch.delta = noise_mm > 0 ? 0.2 : 0.1;
   if (window) window(options.touch.window);
   s->plan = plan_measurement(s->model, s->reference, s->T_M_S, machine, options);
-  s->touches = touch_true_part(*s, s->swept, s->missed);
+  testing::TrueTouches touches = testing::touch_true_part(s->truth.mesh, s->T_M_S, s->plan, kRadius, kSigma, 20260611);
+  s->touches = std::move(touches.outcomes);
+  s->missed = touches.missed;
   return s;
 }
 
