@@ -1,5 +1,8 @@
 #include "daemon/rpc_client.hpp"
 
+#include <poll.h>
+
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <chrono>
@@ -60,8 +63,8 @@ struct RpcClient::Connection {
   std::deque<json> notifications;
   std::int64_t next_id = 1;
 
-  // Runs the one operation started before it until it completes or the deadline passes (then it
-  // is cancelled and completes with operation_aborted, unless it had completed already).
+  // Runs the connect started before it until it completes or the deadline passes (then it is
+  // cancelled and completes with operation_aborted, unless it had completed already).
   void run(Clock::time_point deadline) {
     io.restart();
     io.run_until(deadline);
@@ -78,19 +81,31 @@ struct RpcClient::Connection {
     throw RpcClientError(endpoint + ": " + doing + ": " + ec.message());
   }
 
+  // After connecting, the socket is non-blocking and waits are poll(2) on it: a round trip costs
+  // two system calls each way, as a bare blocking client's would, not an io_context run.
+  bool wait(short events, Clock::time_point deadline) {
+    for (;;) {
+      const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()).count();
+      if (left <= 0) return false;
+      pollfd ready{socket.native_handle(), events, 0};
+      const int n = ::poll(&ready, 1, static_cast<int>(std::min<long long>(left, 60'000)));
+      if (n > 0) return true;
+      if (n < 0 && errno != EINTR) fail(asio::error_code(errno, asio::system_category()), "cannot wait");
+    }
+  }
+
   // Reads once more into inbox; false when nothing came before the deadline.
   bool fill(Clock::time_point deadline) {
-    asio::error_code result = asio::error::would_block;
-    std::size_t got = 0;
-    socket.async_read_some(asio::buffer(buffer), [&](const asio::error_code& ec, std::size_t n) {
-      result = ec;
-      got = n;
-    });
-    run(deadline);
-    if (result == asio::error::operation_aborted) return false;
-    if (result) fail(result, "cannot read");
-    inbox.append(buffer.data(), got);
-    return true;
+    for (;;) {
+      asio::error_code ec;
+      const std::size_t got = socket.read_some(asio::buffer(buffer), ec);
+      if (!ec) {
+        inbox.append(buffer.data(), got);
+        return true;
+      }
+      if (ec != asio::error::would_block) fail(ec, "cannot read");
+      if (!wait(POLLIN, deadline)) return false;
+    }
   }
 
   std::optional<std::string> next_line(Clock::time_point deadline) {
@@ -108,16 +123,18 @@ struct RpcClient::Connection {
   }
 
   void send(std::string_view bytes, double timeout_s) {
-    asio::error_code result = asio::error::would_block;
-    asio::async_write(socket, asio::buffer(bytes), [&](const asio::error_code& ec, std::size_t) { result = ec; });
-    run(deadline_in(timeout_s));
-    if (result == asio::error::operation_aborted) {
-      // Part of the line may be out: the stream cannot be framed any more.
-      asio::error_code ignored;
-      socket.close(ignored);
-      throw RpcClientError(endpoint + ": cmmd took nothing for " + seconds_text(timeout_s) + "; connection closed");
+    const auto deadline = deadline_in(timeout_s);
+    while (!bytes.empty()) {
+      asio::error_code ec;
+      bytes.remove_prefix(socket.write_some(asio::buffer(bytes), ec));
+      if (!ec) continue;
+      if (ec != asio::error::would_block) fail(ec, "cannot send");
+      if (!wait(POLLOUT, deadline)) {
+        // Part of the line may be out: the stream cannot be framed any more.
+        socket.close(ec);
+        throw RpcClientError(endpoint + ": cmmd took nothing for " + seconds_text(timeout_s) + "; connection closed");
+      }
     }
-    if (result) fail(result, "cannot send");
   }
 
   // A server notification is queued; true when the line was one.
@@ -174,6 +191,8 @@ RpcClient RpcClient::connect(const std::string& endpoint, double timeout_s) {
   if (ec == asio::error::operation_aborted)
     throw RpcClientError(failed + "no answer within " + seconds_text(timeout_s) + " — is cmmd running?");
   if (ec) throw RpcClientError(failed + ec.message() + hint(ec));
+  c->socket.non_blocking(true, ec);
+  if (ec) throw RpcClientError(failed + ec.message());
   return RpcClient(std::move(c));
 }
 

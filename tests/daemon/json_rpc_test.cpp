@@ -133,7 +133,7 @@ TEST_F(DispatcherTest, SpecificationExamples) {
 }
 
 TEST_F(DispatcherTest, IdsOfEveryAllowedTypeComeBackAsSent) {
-  for (const json id : {json("abc"), json(17), json(-3), json(2.5), json(nullptr)}) {
+  for (const json& id : {json("abc"), json(17), json(-3), json(2.5), json(nullptr)}) {
     const auto reply = dispatcher.handle({{"jsonrpc", "2.0"}, {"method", "echo"}, {"params", {1}}, {"id", id}}, ctx);
     ASSERT_TRUE(reply.has_value());
     EXPECT_EQ(reply->at("id"), id);
