@@ -22,6 +22,8 @@
 #include <asio/post.hpp>
 #include <gtest/gtest.h>
 
+#include "fresh_folder.hpp"
+
 namespace cmm::daemon {
 namespace {
 
@@ -32,9 +34,7 @@ using namespace std::chrono_literals;
 class FakeNotifySocket {
  public:
   FakeNotifySocket() {
-    folder_ = fs::path(::testing::TempDir()) / ("cmmd-notify-" + std::to_string(getpid()));
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
+    folder_ = fresh_folder("notify");
     path_ = folder_ / "notify";
     fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
     if (fd_ < 0) throw std::system_error(errno, std::generic_category(), "socket(AF_UNIX, SOCK_DGRAM)");
