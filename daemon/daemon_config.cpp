@@ -1,0 +1,167 @@
+#include "daemon/daemon_config.hpp"
+
+#include <cstdlib>
+#include <fstream>
+#include <set>
+
+#include "hal/config_block.hpp"
+#include "sim/sim_config.hpp"
+
+namespace cmm::daemon {
+
+namespace {
+
+std::filesystem::path resolved(const std::string& text, const std::filesystem::path& base_dir) {
+  if (text.empty()) return {};
+  const std::filesystem::path p(text);
+  return p.is_absolute() ? p : base_dir / p;
+}
+
+// systemd hands the directories it made through the environment; they win over the file.
+std::filesystem::path from_environment(const char* variable, const std::filesystem::path& fallback) {
+  const char* value = std::getenv(variable);
+  if (value == nullptr || *value == '\0') return fallback;
+  std::string first(value);
+  if (const auto colon = first.find(':'); colon != std::string::npos) first.resize(colon);
+  return first;
+}
+
+template <class T, class FromJson, class FromFile>
+T described(hal::ConfigBlock& block, const std::string& key, T fallback, const std::filesystem::path& base_dir,
+            FromJson from_json, FromFile from_file) {
+  const nlohmann::json* j = block.raw(key);
+  if (j == nullptr || (j->is_string() && j->get<std::string>().empty())) return fallback;
+  try {
+    if (j->is_string()) return from_file(resolved(j->get<std::string>(), base_dir));
+    if (j->is_object()) return from_json(*j, block.pointer() + "/" + key);
+    block.problem(key, "must be a file name or an object");
+  } catch (const std::exception& e) {
+    block.problem(key, e.what());
+  }
+  return fallback;
+}
+
+void read_server(hal::ConfigBlock& b, DaemonConfig& c) {
+  ServerOptions& s = c.server;
+  s.tcp_bind = b.text("tcp_bind", s.tcp_bind);
+  s.tcp_port = b.integer("tcp_port", s.tcp_port, 0, 65535);
+  s.tcp_enabled = b.flag("tcp_enabled", s.tcp_enabled);
+  const std::string socket = b.text("unix_socket", "cmmd.sock");
+  s.unix_path = socket.empty() ? std::string() : resolved(socket, c.runtime_dir).string();
+  const std::string mode = b.text("unix_mode", "0660");
+  try {
+    std::size_t used = 0;
+    s.unix_mode = static_cast<unsigned>(std::stoul(mode, &used, 8));
+    if (used != mode.size() || s.unix_mode > 0777) throw std::invalid_argument(mode);
+  } catch (const std::exception&) {
+    b.problem("unix_mode", "must be an octal mode such as \"0660\"");
+  }
+  s.max_request_bytes = static_cast<std::size_t>(b.number("max_request_bytes", static_cast<double>(s.max_request_bytes), 1024, 1 << 30));
+  s.max_connections = b.integer("max_connections", s.max_connections, 1, 100000);
+  s.max_pending_requests = b.integer("max_pending_requests", s.max_pending_requests, 1, 100000);
+  s.idle_timeout_s = b.number("idle_timeout_s", s.idle_timeout_s, 0.01, 86400);
+  s.worker_threads = b.integer("worker_threads", s.worker_threads, 1, 64);
+  s.tokens.clear();
+  for (hal::ConfigBlock token : b.objects("tokens")) {
+    AccessToken t;
+    t.token = token.text("token", "");
+    if (t.token.size() < 16) token.problem("token", "must be at least 16 characters");
+    t.role = role_from_string(token.text("role", "observer", {"observer", "operator"}));
+    token.finish();
+    s.tokens.push_back(t);
+  }
+  b.finish();
+}
+
+}  // namespace
+
+DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string& source,
+                                     const std::filesystem::path& base_dir) {
+  DaemonConfig c;
+  c.source = source;
+  hal::ConfigBlock block(j);
+  hal::ConfigBlock server = block.object("server");
+  c.state_dir = from_environment("STATE_DIRECTORY", resolved(block.text("state_dir", "/var/lib/cmmd"), base_dir));
+  c.runtime_dir = from_environment("RUNTIME_DIRECTORY", resolved(block.text("runtime_dir", "/run/cmmd"), base_dir));
+  c.models_dir = resolved(block.text("models_dir", ""), base_dir);
+  read_server(server, c);
+  {
+    hal::ConfigBlock log = block.object("log");
+    c.log_level = log.text("level", "info", {"trace", "debug", "info", "warn", "error", "critical", "off"});
+    log.finish();
+  }
+  if (const nlohmann::json* machine = block.raw("machine")) {
+    if (!machine->is_object()) {
+      block.problem("machine", "must be an object: the driver's block, with \"driver\"");
+    } else {
+      c.machine = *machine;
+      const std::string driver = machine->value("driver", std::string("sim"));
+      static const std::set<std::string> drivers = {"sim", "modbus", "grbl", "serial"};
+      if (!drivers.contains(driver))
+        block.problem("machine", "driver \"" + driver + "\" is not one of sim, modbus, grbl (serial)");
+      // "serial" is the name for the Grbl serial driver; the driver block knows it as grbl.
+      c.driver = driver == "serial" ? "grbl" : driver;
+      c.machine["driver"] = c.driver;
+    }
+  }
+  // What jobs are planned for: the named description, else the simulator's own, else the default.
+  planner::MachineDescription fallback = planner::default_machine();
+  if (c.driver == "sim") {
+    try {
+      fallback = sim::sim_config_from_json(c.machine, base_dir.string()).machine;
+    } catch (const hal::ConfigError& e) {
+      for (const std::string& p : e.problems()) block.problem("machine", p);
+    }
+  }
+  c.description = described(block, "machine_description", fallback, base_dir, planner::machine_from_json,
+                            [](const std::filesystem::path& f) { return planner::read_machine(f); });
+  c.plate = described(block, "plate", sim::default_plate(), base_dir, planner::plate_from_json,
+                      [](const std::filesystem::path& f) { return planner::read_plate(f); });
+  {
+    hal::ConfigBlock job = block.object("job");
+    c.job.delta_mm = job.number("delta_mm", c.job.delta_mm, 0.001, 10);
+    c.job.spacing_mm = job.number("spacing_mm", c.job.spacing_mm, 0.05, 100);
+    c.job.feature_angle_deg = job.number("feature_angle_deg", c.job.feature_angle_deg, 1, 179);
+    c.job.trigger_sigma_mm = job.number("trigger_sigma_mm", c.job.trigger_sigma_mm, 0, 1);
+    job.finish();
+  }
+  block.finish();
+  block.throw_if_problems(source);
+  return c;
+}
+
+DaemonConfig read_daemon_config(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw hal::ConfigError(file.string(), {"cannot be opened"});
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw hal::ConfigError(file.string(), {std::string("not JSON: ") + e.what()});
+  }
+  return daemon_config_from_json(j, file.string(), file.parent_path());
+}
+
+std::vector<std::string> changes_needing_restart(const DaemonConfig& running, const DaemonConfig& next) {
+  std::vector<std::string> changed;
+  const ServerOptions &a = running.server, &b = next.server;
+  if (a.tcp_bind != b.tcp_bind || a.tcp_port != b.tcp_port || a.tcp_enabled != b.tcp_enabled ||
+      a.unix_path != b.unix_path || a.unix_mode != b.unix_mode || a.max_request_bytes != b.max_request_bytes ||
+      a.max_connections != b.max_connections || a.max_pending_requests != b.max_pending_requests ||
+      a.idle_timeout_s != b.idle_timeout_s || a.worker_threads != b.worker_threads)
+    changed.push_back("server (other than tokens)");
+  if (running.job.delta_mm != next.job.delta_mm || running.job.spacing_mm != next.job.spacing_mm ||
+      running.job.feature_angle_deg != next.job.feature_angle_deg ||
+      running.job.trigger_sigma_mm != next.job.trigger_sigma_mm)
+    changed.push_back("job");
+  if (running.state_dir != next.state_dir) changed.push_back("state_dir");
+  if (running.runtime_dir != next.runtime_dir) changed.push_back("runtime_dir");
+  if (running.models_dir != next.models_dir) changed.push_back("models_dir");
+  if (running.machine != next.machine) changed.push_back("machine");
+  if (planner::to_json(running.description) != planner::to_json(next.description))
+    changed.push_back("machine_description");
+  if (planner::to_json(running.plate) != planner::to_json(next.plate)) changed.push_back("plate");
+  return changed;
+}
+
+}  // namespace cmm::daemon
