@@ -1,0 +1,270 @@
+#include "daemon/job_manager.hpp"
+
+#include <chrono>
+
+#include <spdlog/spdlog.h>
+
+#include "daemon/rpc_error.hpp"
+#include "hal/utc_time.hpp"
+
+namespace cmm::daemon {
+
+namespace {
+
+nlohmann::json record_json(const JobRecord& record) {
+  nlohmann::json j = record;
+  return j;
+}
+
+// The request as stored: every default filled in, so a job resumed after a config change runs
+// with the values it was submitted with.
+nlohmann::json normalized(nlohmann::json params, const JobRequest& r) {
+  params["scale"] = r.scale;
+  params["delta_mm"] = r.delta_mm;
+  params["spacing_mm"] = r.spacing_mm;
+  params["feature_angle_deg"] = r.feature_angle_deg;
+  params["seed"] = r.seed;
+  nlohmann::json& reg = params["registration"];
+  if (reg.contains("measure_plate")) reg["measure_plate"]["plate"] = planner::to_json(r.plate);
+  else reg["plate"] = planner::to_json(r.plate);
+  return params;
+}
+
+}  // namespace
+
+JobManager::JobManager(const DaemonConfig& config, MachineLink& machine, ModelStore& models, JobStore& store,
+                       Notify notify, std::string version)
+    : config_(config), machine_(machine), models_(models), store_(store), notify_(std::move(notify)),
+      version_(std::move(version)) {}
+
+JobManager::~JobManager() { shutdown(); }
+
+void JobManager::start() {
+  for (JobRecord& record : store_.recover()) {
+    auto job = std::make_unique<Job>();
+    job->record = std::move(record);
+    try {
+      job->request = parse_job_request(job->record.request, config_);
+    } catch (const std::exception& e) {
+      job->request_error = e.what();
+    }
+    if (job->record.state == JobState::interrupted)
+      spdlog::warn("job {}: interrupted by the last restart ({}); job.resume continues it", job->record.id,
+                   job->record.reason);
+    const int id = job->record.id;
+    jobs_[id] = std::move(job);
+  }
+  worker_ = std::thread([this] { worker(); });
+}
+
+void JobManager::shutdown() {
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_ && !worker_.joinable()) return;
+    stopping_ = true;
+    if (running_) {
+      jobs_.at(*running_)->control.shutdown = true;
+      try {
+        machine_.cmm().stop();
+      } catch (const std::exception& e) {
+        spdlog::warn("stopping the machine for shutdown: {}", e.what());
+      }
+    }
+  }
+  wake_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+JobManager::Job& JobManager::find(int id) {
+  const auto it = jobs_.find(id);
+  if (it == jobs_.end()) throw RpcError(rpc_code::not_found, "no job " + std::to_string(id), {{"job", id}});
+  return *it->second;
+}
+
+const JobManager::Job& JobManager::find(int id) const { return const_cast<JobManager*>(this)->find(id); }
+
+void JobManager::save_and_notify(const Job& job) {
+  try {
+    store_.save(job.record);
+  } catch (const std::exception& e) {
+    spdlog::error("job {}: cannot save its record: {}", job.record.id, e.what());
+  }
+  notify_("job", "job.state",
+          {{"job", job.record.id}, {"state", to_string(job.record.state)}, {"reason", job.record.reason}});
+}
+
+void JobManager::set_state(Job& job, JobState state, const std::string& reason, const std::optional<JobFault>& fault) {
+  job.record.state = state;
+  job.record.reason = reason;
+  job.record.fault = fault;
+  job.record.updated = hal::utc_now();
+  if (!is_running(state)) job.record.progress.eta_s = 0;
+  spdlog::info("job {}: {}{}{}", job.record.id, to_string(state), reason.empty() ? "" : ": ", reason);
+  save_and_notify(job);
+}
+
+JobSink JobManager::sink_for(Job& job) {
+  JobSink sink;
+  sink.state = [this, &job](JobState state, const std::string& reason, const std::optional<JobFault>& fault) {
+    std::lock_guard lock(mutex_);
+    set_state(job, state, reason, fault);
+  };
+  sink.progress = [this, &job](const JobProgress& progress) {
+    nlohmann::json params;
+    {
+      std::lock_guard lock(mutex_);
+      job.record.progress = progress;
+      params = {{"job", job.record.id}, {"phase", progress.phase}, {"done", progress.done},
+                {"total", progress.total}, {"eta_s", progress.eta_s}};
+    }
+    notify_("job", "job.progress", params);
+  };
+  sink.touched = [this, &job](int touch, const hal::TouchResult& r) {
+    notify_("job", "job.touch",
+            {{"job", job.record.id}, {"touch", touch}, {"contact", r.contact},
+             {"centre", {r.centre.x(), r.centre.y(), r.centre.z()}}});
+  };
+  return sink;
+}
+
+void JobManager::worker() {
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    // The head of the queue: the oldest job not finished. Paused and interrupted jobs hold it.
+    Job* head = nullptr;
+    for (auto& [id, job] : jobs_)
+      if (!is_final(job->record.state)) {
+        head = job.get();
+        break;
+      }
+    const bool runnable = head != nullptr && (head->record.state == JobState::queued ||
+                                              (is_resumable(head->record.state) && head->resume_requested));
+    if (!runnable) {
+      wake_.wait(lock);
+      continue;
+    }
+    if (!head->request) {
+      set_state(*head, JobState::failed, "request.json no longer parses: " + head->request_error, std::nullopt);
+      continue;
+    }
+    std::optional<MachineLink::Lease> lease = machine_.try_lease("job " + std::to_string(head->record.id));
+    if (!lease) {  // a manual home or qualification holds the machine for one call
+      wake_.wait_for(lock, std::chrono::milliseconds(100));
+      continue;
+    }
+    const bool rehome = head->record.state == JobState::interrupted;
+    const bool reregister = head->reregister;
+    head->resume_requested = head->reregister = false;
+    head->control.clear();
+    if (!head->runner)
+      head->runner = std::make_unique<JobRunner>(RunEnvironment{config_, machine_, models_, store_, version_},
+                                                 head->record.id, *head->request, head->control, sink_for(*head));
+    running_ = head->record.id;
+    lock.unlock();
+    head->runner->run(rehome, reregister);
+    lease.reset();
+    lock.lock();
+    running_.reset();
+  }
+}
+
+nlohmann::json JobManager::submit(const nlohmann::json& params) {
+  const JobRequest request = parse_job_request(params, config_);
+  models_.resolve(request.model);  // refuse an unknown model now, not when the job comes up
+  std::lock_guard lock(mutex_);
+  if (stopping_) throw RpcError(rpc_code::shutting_down, "cmmd is stopping");
+  auto job = std::make_unique<Job>();
+  job->record = store_.create(normalized(params, request), request.name, request.model);
+  job->request = request;
+  const int id = job->record.id;
+  jobs_[id] = std::move(job);
+  spdlog::info("job {}: queued ({})", id, request.model);
+  notify_("job", "job.state", {{"job", id}, {"state", "queued"}, {"reason", ""}});
+  wake_.notify_all();
+  return record_json(jobs_[id]->record);
+}
+
+nlohmann::json JobManager::get(int id) const {
+  std::lock_guard lock(mutex_);
+  return record_json(find(id).record);
+}
+
+nlohmann::json JobManager::list() const {
+  std::lock_guard lock(mutex_);
+  nlohmann::json jobs = nlohmann::json::array();
+  for (const auto& [id, job] : jobs_) jobs.push_back(record_json(job->record));
+  return {{"jobs", jobs}};
+}
+
+nlohmann::json JobManager::pause(int id) {
+  std::lock_guard lock(mutex_);
+  Job& job = find(id);
+  if (is_final(job.record.state) || is_resumable(job.record.state))
+    throw RpcError(rpc_code::invalid_state, "job " + std::to_string(id) + " is " + to_string(job.record.state),
+                   {{"state", to_string(job.record.state)}});
+  if (running_ == id) job.control.pause = true;  // held after the current touch
+  else set_state(job, JobState::paused, "operator pause", std::nullopt);
+  return record_json(job.record);
+}
+
+nlohmann::json JobManager::resume(int id, bool reregister) {
+  std::lock_guard lock(mutex_);
+  Job& job = find(id);
+  if (!is_resumable(job.record.state))
+    throw RpcError(rpc_code::invalid_state,
+                   "job " + std::to_string(id) + " is " + to_string(job.record.state) + ", not paused or interrupted",
+                   {{"state", to_string(job.record.state)}});
+  job.resume_requested = true;
+  job.reregister = reregister;
+  wake_.notify_all();
+  return record_json(job.record);
+}
+
+nlohmann::json JobManager::cancel(int id) {
+  std::lock_guard lock(mutex_);
+  Job& job = find(id);
+  if (is_final(job.record.state))
+    throw RpcError(rpc_code::invalid_state, "job " + std::to_string(id) + " is already " + to_string(job.record.state),
+                   {{"state", to_string(job.record.state)}});
+  if (running_ == id) {
+    job.control.cancel = true;
+    try {
+      machine_.cmm().stop();
+    } catch (const std::exception& e) {
+      spdlog::warn("job {}: stopping the machine to cancel: {}", id, e.what());
+    }
+  } else {
+    set_state(job, JobState::cancelled, "cancelled by the operator", std::nullopt);
+    wake_.notify_all();
+  }
+  return record_json(job.record);
+}
+
+nlohmann::json JobManager::result(int id, const std::string& format) const {
+  std::lock_guard lock(mutex_);
+  const Job& job = find(id);
+  if (job.record.state != JobState::done)
+    throw RpcError(rpc_code::invalid_state, "job " + std::to_string(id) + " is " + to_string(job.record.state) + ", not done",
+                   {{"state", to_string(job.record.state)}});
+  if (format == "csv") {
+    const std::optional<std::string> csv = store_.read_file(id, "result.csv");
+    if (!csv) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.csv");
+    return {{"csv", *csv}};
+  }
+  if (format != "json") throw RpcError(rpc_code::invalid_params, "format must be json or csv", {{"path", "/format"}});
+  const std::optional<std::string> text = store_.read_file(id, "result.json");
+  if (!text) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.json");
+  return nlohmann::json::parse(*text);
+}
+
+void JobManager::machine_stopped() {
+  std::lock_guard lock(mutex_);
+  if (running_) jobs_.at(*running_)->control.operator_stop = true;
+}
+
+std::optional<int> JobManager::running_job() const {
+  std::lock_guard lock(mutex_);
+  return running_;
+}
+
+}  // namespace cmm::daemon

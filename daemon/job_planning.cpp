@@ -1,0 +1,89 @@
+#include "daemon/job_planning.hpp"
+
+#include <cmath>
+#include <variant>
+
+#include "daemon/rpc_error.hpp"
+#include "geometry/file_error.hpp"
+#include "geometry/mesh_io.hpp"
+
+namespace cmm::daemon {
+
+ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request) {
+  ReferenceModel m;
+  geometry::ReadResult read;
+  try {
+    read = geometry::read_model(file);
+  } catch (const std::exception& e) {
+    throw RpcError(rpc_code::model_error, e.what(), {{"file", file.string()}});
+  }
+  if (std::holds_alternative<geometry::PointCloud>(read.model))
+    throw RpcError(rpc_code::model_error,
+                   file.string() + " holds a point cloud, not a mesh: meshing a raw scan is not built yet",
+                   {{"file", file.string()}});
+  m.mesh = std::get<geometry::TriangleMesh>(std::move(read.model));
+  if (m.mesh.faces.rows() == 0)
+    throw RpcError(rpc_code::model_error, file.string() + ": no usable triangles left after dropping degenerate ones",
+                   {{"file", file.string()}});
+  m.mesh.vertices *= request.scale;
+  if (!m.mesh.vertices.allFinite())
+    throw RpcError(rpc_code::model_error, file.string() + ": scale takes coordinates beyond a double's range",
+                   {{"file", file.string()}});
+  m.inputs.model_file = file;
+  m.inputs.scale = request.scale;
+  m.inputs.spacing = request.spacing_mm;
+  m.inputs.feature_angle_deg = request.feature_angle_deg;
+  m.inputs.delta = request.delta_mm;
+  m.inputs.delta_source = "job request (or cmmd.json's job.delta_mm)";
+  m.inputs.read_report = read.report;
+  m.inputs.vertex_count = static_cast<std::size_t>(m.mesh.vertices.rows());
+  m.inputs.face_count = static_cast<std::size_t>(m.mesh.faces.rows());
+  geometry::FeatureModelOptions options;
+  options.spacing = request.spacing_mm;
+  options.features.angle_deg = request.feature_angle_deg;
+  try {
+    m.features = geometry::extract_features(m.mesh, options);
+  } catch (const std::exception& e) {
+    throw RpcError(rpc_code::model_error, file.string() + ": " + e.what(), {{"file", file.string()}});
+  }
+  return m;
+}
+
+planner::MachineDescription machine_for_job(const planner::MachineDescription& configured, const hal::MachineInfo& info) {
+  planner::MachineDescription machine = configured;
+  for (const hal::TipInfo& tip : info.tips)
+    for (planner::StylusTip& described : machine.tips)
+      if (described.id == tip.id) {
+        described.ball_radius_mm = tip.ball_radius_mm;
+        described.offset = tip.offset;
+      }
+  if (!info.active_tip.empty()) machine.active_tip = info.active_tip;
+  return machine;
+}
+
+planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
+                                  const planner::MachineDescription& machine, const JobRequest& request) {
+  planner::MeasurementPlanOptions options;
+  options.touch.radius = machine.tip().ball_radius_mm;
+  options.touch.delta = request.delta_mm;
+  try {
+    return planner::plan_measurement(model.features, model.mesh, T_M_S, machine, options);
+  } catch (const std::exception& e) {
+    throw RpcError(rpc_code::planning_error, std::string("cannot plan the job: ") + e.what());
+  }
+}
+
+nlohmann::json transform_json(const Eigen::Isometry3d& T) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({T(r, 0), T(r, 1), T(r, 2), T(r, 3)});
+  return rows;
+}
+
+Eigen::Isometry3d transform_from_json(const nlohmann::json& j) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) T(r, c) = j.at(static_cast<std::size_t>(r)).at(static_cast<std::size_t>(c)).get<double>();
+  return T;
+}
+
+}  // namespace cmm::daemon

@@ -1,0 +1,41 @@
+// The machine-free steps of a job, shared by the job runner and plan.preview: read the reference
+// mesh, extract its features, and plan the touches for the active tip once T_M_S is known.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "daemon/job_request.hpp"
+#include "geometry/feature_model.hpp"
+#include "hal/machine_info.hpp"
+#include "planner/machine.hpp"
+#include "planner/measurement_plan.hpp"
+#include "planner/plan_json.hpp"
+
+namespace cmm::daemon {
+
+struct ReferenceModel {
+  geometry::TriangleMesh mesh;  // S, mm
+  geometry::FeatureModel features;
+  planner::PlanInputs inputs;   // what the plan JSON records of its inputs
+};
+
+// Throws RpcError model_error naming the file (and line, when the reader knows it) for a mesh that
+// cannot be read, a point cloud, or a mesh with nothing left after cleaning.
+ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request);
+
+// The description the plan is made for: the configured one, with the machine's active tip and its
+// qualified radius (a job uses the active tip's qualified radius, DESIGN.md).
+planner::MachineDescription machine_for_job(const planner::MachineDescription& configured, const hal::MachineInfo& info);
+
+// Throws RpcError planning_error when the plan cannot be made.
+planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
+                                  const planner::MachineDescription& machine, const JobRequest& request);
+
+// T_M_S as the plan JSON writes it (4×4, row-major nested arrays) and back.
+nlohmann::json transform_json(const Eigen::Isometry3d& T);
+Eigen::Isometry3d transform_from_json(const nlohmann::json& j);
+
+}  // namespace cmm::daemon

@@ -1,0 +1,44 @@
+// What a job.submit asks for (docs/api.md, Job request), checked field by field so a bad request is
+// refused with the JSON Pointer of its first bad field before anything is queued or moved.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "daemon/daemon_config.hpp"
+#include "planner/registration.hpp"
+
+namespace cmm::daemon {
+
+// Corners the scan gives, and where the operator roughly put them on the machine: the machine then
+// probes each corner (and the fiducial) and T_M_S is fitted to what it measured.
+struct PlateMeasurement {
+  std::vector<int> ids;                  // 1-based plate corner ids
+  std::vector<planner::Vec3> scan;       // S, parallel to ids
+  std::vector<planner::Vec3> rough_machine;  // M, a few mm is good enough; parallel to ids
+};
+
+struct JobRequest {
+  std::string model;  // "sha256:<hex>" or "file:<name>"
+  std::string name;
+  double scale = 1;
+  double delta_mm = 0.2;
+  double spacing_mm = 2;
+  double feature_angle_deg = 30;
+  std::uint64_t seed = 1;
+  planner::Plate plate;
+  // Exactly one of these: corner pairs given, or the plate measured on the machine.
+  std::optional<planner::RegistrationInput> given;
+  std::optional<PlateMeasurement> measure;
+};
+
+// Throws RpcError invalid_params whose data.path is the JSON Pointer of the bad field. Defaults
+// come from the config's job block and plate. plan.preview may leave the registration out
+// (`registration_optional`); a job may not.
+JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& config,
+                             bool registration_optional = false);
+
+}  // namespace cmm::daemon

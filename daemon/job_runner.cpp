@@ -1,0 +1,264 @@
+#include "daemon/job_runner.hpp"
+
+#include <chrono>
+#include <map>
+#include <set>
+
+#include "daemon/job_planning.hpp"
+#include "daemon/job_result.hpp"
+#include "daemon/rpc_error.hpp"
+#include "daemon/touch_journal.hpp"
+#include "daemon/touch_motion.hpp"
+#include "hal/fault.hpp"
+#include "hal/utc_time.hpp"
+#include "planner/corner_probing.hpp"
+
+namespace cmm::daemon {
+
+namespace {
+
+// Unwinds a run at a safe point between steps into the state it should stop in.
+struct Held {
+  JobState state;
+  std::string reason;
+};
+
+nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+hal::TipInfo active_tip(const hal::MachineInfo& info) {
+  for (const hal::TipInfo& tip : info.tips)
+    if (tip.id == info.active_tip) return tip;
+  throw RpcError(rpc_code::planning_error, "the machine reports no active tip (\"" + info.active_tip + "\")");
+}
+
+}  // namespace
+
+struct JobRunner::Registration {
+  Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
+  nlohmann::json file;  // registration.json
+};
+
+JobRunner::JobRunner(RunEnvironment env, int job_id, JobRequest request, JobControl& control, JobSink sink)
+    : env_(env), id_(job_id), request_(std::move(request)), control_(control), sink_(std::move(sink)) {}
+
+void JobRunner::check_control() const {
+  if (control_.shutdown) throw Held{JobState::interrupted, "cmmd stopped during the job"};
+  if (control_.cancel) throw Held{JobState::cancelled, "cancelled by the operator"};
+  if (control_.operator_stop) throw Held{JobState::paused, "operator stop"};
+  if (control_.pause) throw Held{JobState::paused, "operator pause"};
+}
+
+// Up, reset and homed as the run needs; a touch cut short by the last run is left the way it came.
+void JobRunner::prepare_machine(bool rehome) {
+  env_.machine.bring_up();
+  hal::Cmm& cmm = env_.machine.cmm();
+  hal::MachineStatus s = cmm.status();
+  // The operator asked to go on: that is the word a latched abort or a released e-stop waits for.
+  if (s.aborted || s.estop) {
+    cmm.reset();
+    s = cmm.status();
+  }
+  const planner::MachineDescription& d = env_.config.description;
+  if (!rehome && s.homed && touch_in_progress_) leave_touch(cmm, *touch_in_progress_, d.clearance_z, {0, d.probe_speed_mm_s});
+  touch_in_progress_.reset();
+  if (rehome || !s.homed) cmm.home();
+}
+
+JobRunner::Registration JobRunner::measure_plate(double radius_mm) {
+  const planner::Plate& plate = request_.plate;
+  const PlateMeasurement& m = *request_.measure;
+  const Eigen::Isometry3d rough = planner::fit_plate_pose(plate, m.ids, m.rough_machine);
+  planner::CornerProbingOptions options;
+  options.ball_radius_mm = radius_mm;
+  const std::vector<planner::Touch> touches = planner::plan_corner_touches(plate, rough, options);
+  const planner::MachineDescription& d = env_.config.description;
+  std::vector<planner::Vec3> centres;
+  for (std::size_t i = 0; i < touches.size(); ++i) {
+    check_control();
+    sink_.progress({"registering", static_cast<int>(i), static_cast<int>(touches.size()), 0});
+    touch_in_progress_ = touches[i];
+    const hal::TouchResult r = run_touch(env_.machine.cmm(), touches[i], d.clearance_z, {0, d.probe_speed_mm_s});
+    touch_in_progress_.reset();
+    if (!r.contact)
+      throw RpcError(rpc_code::registration_error,
+                     "plate touch " + std::to_string(touches[i].id) + " (" + planner::to_string(touches[i].target) +
+                         (touches[i].corner > 0 ? ", corner " + std::to_string(touches[i].corner) : std::string()) +
+                         ") found nothing: the plate is not where rough_machine puts it",
+                     {{"kind", "probing"}});
+    centres.push_back(r.centre);
+  }
+  sink_.progress({"registering", static_cast<int>(touches.size()), static_cast<int>(touches.size()), 0});
+  const std::vector<planner::CornerFit> fits = planner::fit_corners(plate, touches, centres, options);
+  planner::RegistrationInput input;
+  input.source = "job " + std::to_string(id_) + " plate measurement";
+  input.plate = plate;
+  std::vector<planner::Vec3> measured;
+  for (std::size_t i = 0; i < m.ids.size(); ++i) {
+    const planner::Vec3 machine = fits.at(static_cast<std::size_t>(m.ids[i] - 1)).position;
+    input.corners.push_back({m.ids[i], m.scan[i], machine});
+    measured.push_back(machine);
+  }
+  const Eigen::Isometry3d T_M_P = planner::fit_plate_pose(plate, m.ids, measured);
+  input.fiducial_machine = planner::locate_fiducial(plate, T_M_P, touches, centres, options).point;
+  const planner::RegistrationResult fit = planner::fit_registration(input, &plate);
+
+  Registration reg;
+  reg.T_M_S = fit.T_M_S;
+  reg.file = {{"method", "measured"}, {"registration", planner::to_json(fit)}, {"corner_touches", touches.size()}};
+  nlohmann::json corners = nlohmann::json::array();
+  for (const planner::CornerFit& c : fits)
+    corners.push_back({{"id", c.corner}, {"machine", vec(c.position)}, {"face_rms_mm", c.face_rms_mm},
+                       {"conditioning", c.conditioning}});
+  reg.file["measured_corners"] = corners;
+  return reg;
+}
+
+JobRunner::Registration JobRunner::registration(bool reregister, double radius_mm, const std::string& tip) {
+  if (!reregister)
+    if (const std::optional<std::string> kept = env_.store.read_file(id_, "registration.json")) {
+      Registration reg;
+      reg.file = nlohmann::json::parse(*kept);
+      reg.T_M_S = transform_from_json(reg.file.at("T_M_S"));
+      return reg;
+    }
+  sink_.state(JobState::registering, "", std::nullopt);
+  Registration reg;
+  try {
+    if (request_.measure) {
+      reg = measure_plate(radius_mm);
+    } else {
+      const planner::RegistrationResult fit = planner::fit_registration(*request_.given, &request_.plate);
+      reg.T_M_S = fit.T_M_S;
+      reg.file = {{"method", "given"}, {"registration", planner::to_json(fit)}};
+    }
+  } catch (const planner::RegistrationError& e) {
+    nlohmann::json corners = e.corners();
+    throw RpcError(rpc_code::registration_error, e.what(), {{"corners", corners}});
+  }
+  // The plan is made again on every resume; keeping the radius and tip it was first made for keeps
+  // its touch ids, and with them the journal, valid even if the tip is qualified again meanwhile.
+  reg.file["T_M_S"] = transform_json(reg.T_M_S);
+  reg.file["radius_mm"] = radius_mm;
+  reg.file["tip"] = tip;
+  reg.file["time_utc"] = hal::utc_now();
+  env_.store.write_file(id_, "registration.json", reg.file.dump(1) + "\n");
+  return reg;
+}
+
+void JobRunner::finish_touch_safely() {
+  if (!touch_in_progress_) return;
+  try {
+    const planner::MachineDescription& d = env_.config.description;
+    leave_touch(env_.machine.cmm(), *touch_in_progress_, d.clearance_z, {0, d.probe_speed_mm_s});
+    touch_in_progress_.reset();
+  } catch (const std::exception&) {
+    // The machine refused to move (a latched abort, a lost link): the resume leaves the touch instead.
+  }
+}
+
+void JobRunner::run(bool rehome, bool reregister) {
+  const std::string started = hal::utc_now();
+  try {
+    sink_.state(JobState::planning, "", std::nullopt);
+    const ReferenceModel model = load_reference_model(env_.models.resolve(request_.model), request_);
+    check_control();
+    prepare_machine(rehome);
+    const double clock0_s = env_.machine.cmm().status().t_s;
+    const hal::MachineInfo info = env_.machine.cmm().info();
+    const hal::TipInfo tip = active_tip(info);
+    const Registration reg = registration(reregister, tip.ball_radius_mm, tip.id);
+    planner::MachineDescription machine = machine_for_job(env_.config.description, info);
+    for (planner::StylusTip& t : machine.tips)
+      if (t.id == reg.file.value("tip", tip.id)) {
+        t.ball_radius_mm = reg.file.value("radius_mm", t.ball_radius_mm);
+        machine.active_tip = t.id;
+      }
+    if (machine.active_tip != info.active_tip)
+      throw RpcError(rpc_code::invalid_state, "job " + std::to_string(id_) + " was registered with tip " +
+                                                  machine.active_tip + " but the machine's active tip is " +
+                                                  info.active_tip + ": select it again, or resume with reregister");
+    check_control();
+    const planner::MeasurementPlan plan = plan_job(model, reg.T_M_S, machine, request_);
+    if (!env_.store.read_file(id_, "plan.json"))
+      env_.store.write_file(id_, "plan.json",
+                            planner::plan_json(model.features, model.inputs, &plan, &machine, reg.file["registration"])
+                                    .dump(1) + "\n");
+
+    // Probing: every touch not yet in the journal, in program order.
+    sink_.state(JobState::probing, "", std::nullopt);
+    const std::filesystem::path journal_file = env_.store.folder(id_) / "touches.jsonl";
+    std::map<int, hal::TouchResult> results;
+    for (const JournalEntry& e : recover_journal(journal_file).entries) results[e.touch_id] = e.result;
+    TouchJournal journal(journal_file);
+    std::map<int, double> planned_s;
+    for (const planner::Motion& m : plan.program.motions) planned_s[m.touch] += m.time_s;
+    double remaining_s = 0;
+    for (const planner::Touch& t : plan.program.touches)
+      if (!results.contains(t.id)) remaining_s += planned_s[t.id];
+    const int total = static_cast<int>(plan.program.touches.size());
+    const auto t0 = std::chrono::steady_clock::now();
+    double planned_done_s = 0;
+    auto report = [&] {
+      // The plan's estimate for what is left, scaled by how this run has kept to the plan so far.
+      const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double pace = planned_done_s > 0 ? wall_s / planned_done_s : 1;
+      sink_.progress({"probing", static_cast<int>(results.size()), total, remaining_s * pace});
+    };
+    report();
+    const double clearance = plan.program.clearance_z;
+    for (const planner::Touch& t : plan.program.touches) {
+      if (results.contains(t.id)) continue;
+      check_control();
+      touch_in_progress_ = t;
+      const hal::TouchResult r = run_touch(env_.machine.cmm(), t, clearance, {0, machine.probe_speed_mm_s});
+      journal.append({t.id, r});
+      touch_in_progress_.reset();
+      results[t.id] = r;
+      remaining_s -= planned_s[t.id];
+      planned_done_s += planned_s[t.id];
+      sink_.touched(t.id, r);
+      report();
+    }
+    // Back up to the travel plane: a finished job leaves the probe clear of the part.
+    const hal::Vec3 at = env_.machine.cmm().status().position;
+    if (at.z() < clearance) env_.machine.cmm().move({hal::Vec3(at.x(), at.y(), clearance), 0});
+
+    const JobResultInputs inputs{.model = model,
+                                 .plan = plan,
+                                 .machine = machine,
+                                 .request = request_,
+                                 .config = env_.config,
+                                 .T_M_S = reg.T_M_S,
+                                 .registration = reg.file,
+                                 .touches = results,
+                                 .tip = tip,
+                                 .machine_time_s = env_.machine.cmm().status().t_s - clock0_s,
+                                 .version = env_.version,
+                                 .started_utc = started,
+                                 .finished_utc = hal::utc_now()};
+    const std::string summary = write_job_result(env_.store, id_, inputs);
+    sink_.state(JobState::done, summary, std::nullopt);
+  } catch (const Held& held) {
+    if (held.state == JobState::cancelled) finish_touch_safely();
+    sink_.state(held.state, held.reason, std::nullopt);
+  } catch (const hal::Fault& fault) {
+    // A stop the operator or cmmd asked for surfaces as the driver's Aborted; say why it came.
+    if (control_.cancel) {
+      finish_touch_safely();
+      sink_.state(JobState::cancelled, "cancelled by the operator", std::nullopt);
+    } else if (control_.shutdown) {
+      sink_.state(JobState::interrupted, "cmmd stopped during the job", std::nullopt);
+    } else {
+      const std::string reason = control_.operator_stop ? "operator stop" : std::string("machine fault: ") + fault.what();
+      sink_.state(JobState::paused, reason, JobFault{hal::to_string(fault.kind()), fault.what()});
+    }
+  } catch (const RpcError& e) {
+    sink_.state(JobState::failed, e.what(), JobFault{"Job", e.what()});
+  } catch (const hal::StateError& e) {
+    sink_.state(JobState::paused, std::string("machine not ready: ") + e.what(), JobFault{"State", e.what()});
+  } catch (const std::exception& e) {
+    sink_.state(JobState::failed, e.what(), JobFault{"Internal", e.what()});
+  }
+}
+
+}  // namespace cmm::daemon

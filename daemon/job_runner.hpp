@@ -1,0 +1,75 @@
+// One job's run on the machine — planning, registering, probing, result — resumable at any point
+// from its folder's files: registration.json keeps T_M_S and the radius, touches.jsonl every touch.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "daemon/daemon_config.hpp"
+#include "daemon/job_record.hpp"
+#include "daemon/job_request.hpp"
+#include "daemon/job_store.hpp"
+#include "daemon/machine_link.hpp"
+#include "daemon/model_store.hpp"
+#include "hal/motion.hpp"
+#include "planner/touch.hpp"
+
+namespace cmm::daemon {
+
+// Requests from other threads, read by the runner between steps (and a stop() makes the step in
+// progress end at once).
+struct JobControl {
+  std::atomic<bool> pause{false};      // job.pause: hold after the current touch
+  std::atomic<bool> cancel{false};     // job.cancel
+  std::atomic<bool> shutdown{false};   // cmmd stopping: the job becomes interrupted
+  std::atomic<bool> operator_stop{false};  // machine.stop or machine.abort during the job
+  void clear() { pause = cancel = shutdown = operator_stop = false; }
+};
+
+// How the runner reports: the manager keeps the record, saves it and notifies clients.
+struct JobSink {
+  std::function<void(JobState, const std::string& reason, const std::optional<JobFault>&)> state;
+  std::function<void(const JobProgress&)> progress;
+  std::function<void(int touch_id, const hal::TouchResult&)> touched;
+};
+
+struct RunEnvironment {
+  const DaemonConfig& config;
+  MachineLink& machine;
+  const ModelStore& models;
+  JobStore& store;
+  std::string version;  // cmmd's, for the result's traceability
+};
+
+class JobRunner {
+ public:
+  JobRunner(RunEnvironment env, int job_id, JobRequest request, JobControl& control, JobSink sink);
+
+  // Runs until the job is done, failed, cancelled, paused or interrupted (the state it reports
+  // last). `rehome` homes before any motion (a job interrupted by a restart); `reregister` measures
+  // the plate again instead of keeping registration.json.
+  void run(bool rehome, bool reregister);
+
+  // The touch that was in progress when the last run ended early, so a resume can leave it safely.
+  const std::optional<planner::Touch>& touch_in_progress() const { return touch_in_progress_; }
+  void set_touch_in_progress(std::optional<planner::Touch> touch) { touch_in_progress_ = std::move(touch); }
+
+ private:
+  struct Registration;
+  void prepare_machine(bool rehome);
+  Registration registration(bool reregister, double radius_mm, const std::string& tip);
+  Registration measure_plate(double radius_mm);
+  void check_control() const;
+  void finish_touch_safely();
+
+  RunEnvironment env_;
+  int id_;
+  JobRequest request_;
+  JobControl& control_;
+  JobSink sink_;
+  std::optional<planner::Touch> touch_in_progress_;
+};
+
+}  // namespace cmm::daemon

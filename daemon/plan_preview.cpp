@@ -1,0 +1,132 @@
+#include "daemon/plan_preview.hpp"
+
+#include <numbers>
+
+#include "daemon/job_planning.hpp"
+#include "daemon/rpc_error.hpp"
+#include "daemon/touch_motion.hpp"
+#include "hal/fault.hpp"
+#include "planner/rigid_fit.hpp"
+#include "sim/simulated_cmm.hpp"
+
+namespace cmm::daemon {
+
+namespace {
+
+nlohmann::json pose_json(const Eigen::Isometry3d& T) {
+  // sim_config's poses rotate about x, then y, then z: R = Rz·Ry·Rx.
+  const Eigen::Vector3d zyx = T.rotation().eulerAngles(2, 1, 0) * (180 / std::numbers::pi);
+  const Eigen::Vector3d t = T.translation();
+  return {{"rotation_deg", {zyx[2], zyx[1], zyx[0]}}, {"translation", {t.x(), t.y(), t.z()}}};
+}
+
+Eigen::Isometry3d preview_registration(const JobRequest& request, std::vector<std::string>& notes) {
+  if (request.given) {
+    std::vector<planner::Vec3> scan, machine;
+    for (const planner::CornerPair& c : request.given->corners) {
+      scan.push_back(c.scan);
+      machine.push_back(c.machine);
+    }
+    return planner::fit_rigid(scan, machine).transform;
+  }
+  if (request.measure) {
+    notes.push_back("registration previewed from the rough machine corners; the job measures the plate");
+    return planner::fit_rigid(request.measure->scan, request.measure->rough_machine).transform;
+  }
+  notes.push_back("no registration given: T_M_S is taken as identity");
+  return Eigen::Isometry3d::Identity();
+}
+
+// The simulator's block: the reference mesh standing where T_M_S puts it, on a plate under it.
+nlohmann::json sim_block(const std::filesystem::path& model_file, const JobRequest& request,
+                         const planner::MachineDescription& machine, const geometry::TriangleMesh& mesh,
+                         const Eigen::Isometry3d& T_M_S) {
+  const Eigen::Vector3d lo = mesh.vertices.colwise().minCoeff().transpose();
+  const Eigen::Vector3d hi = mesh.vertices.colwise().maxCoeff().transpose();
+  const planner::Plate& plate = request.plate;
+  Eigen::Vector3d plate_mid = Eigen::Vector3d::Zero();
+  for (const planner::Vec3& c : plate.corners) plate_mid += c;
+  plate_mid /= static_cast<double>(plate.corners.size());
+  Eigen::Isometry3d T_S_P = Eigen::Isometry3d::Identity();
+  T_S_P.translation() = Eigen::Vector3d(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), lo.z()) -
+                        Eigen::Vector3d(plate_mid.x(), plate_mid.y(), plate.top_z());
+  return {{"driver", "sim"},
+          {"machine", planner::to_json(machine)},
+          {"plate", planner::to_json(plate)},
+          {"plate_pose", pose_json(T_M_S * T_S_P)},
+          {"part", {{"mesh", model_file.string()}, {"scale", request.scale}}},
+          {"part_pose", pose_json(T_S_P.inverse())},
+          {"trigger_sigma_mm", 0},
+          {"home_position", {machine.travel_box.max.x(), machine.travel_box.max.y(), machine.travel_box.max.z()}}};
+}
+
+// Back to a machine that moves after a fault: enabled, abort cleared, homed.
+void recover(hal::Cmm& cmm) {
+  hal::MachineStatus s = cmm.status();
+  if (s.lifecycle == hal::Lifecycle::connected) cmm.enable();
+  if (s.aborted || s.estop) cmm.reset();
+  if (!cmm.status().homed) cmm.home();
+}
+
+}  // namespace
+
+nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& config, const ModelStore& models,
+                            const hal::MachineInfo* info) {
+  const JobRequest request = parse_job_request(params, config, true);
+  const std::filesystem::path model_file = models.resolve(request.model);
+  const ReferenceModel model = load_reference_model(model_file, request);
+  std::vector<std::string> notes;
+  const Eigen::Isometry3d T_M_S = preview_registration(request, notes);
+  const planner::MachineDescription machine =
+      info ? machine_for_job(config.description, *info) : config.description;
+  if (!info) notes.push_back("the machine could not be read: planned for the configured tip radii");
+  const planner::MeasurementPlan plan = plan_job(model, T_M_S, machine, request);
+
+  sim::SimulatedCmm cmm;
+  cmm.configure(sim_block(model_file, request, machine, model.mesh, T_M_S));
+  cmm.connect();
+  cmm.enable();
+  cmm.home();
+  const double homed_at_s = cmm.status().t_s;
+  int contacts = 0, misses = 0, early = 0, out_of_travel = 0, other = 0;
+  nlohmann::json problems = nlohmann::json::array();
+  for (const planner::Touch& t : plan.program.touches) {
+    try {
+      const hal::TouchResult r = run_touch(cmm, t, plan.program.clearance_z, {0, machine.probe_speed_mm_s});
+      (r.contact ? contacts : misses)++;
+      if (!r.contact) problems.push_back({{"touch", t.id}, {"kind", "miss"}});
+    } catch (const hal::Fault& f) {
+      if (f.kind() == hal::FaultKind::early_trigger) early++;
+      else if (f.kind() == hal::FaultKind::soft_limit) out_of_travel++;
+      else other++;
+      if (problems.size() < 100) problems.push_back({{"touch", t.id}, {"kind", hal::to_string(f.kind())}, {"message", f.what()}});
+      recover(cmm);
+    }
+  }
+  std::size_t probeable = 0;
+  for (const geometry::EdgePoint& p : model.features.points) probeable += p.convex;
+  std::size_t measured_by_plan = 0;
+  for (const planner::EdgePlan& e : plan.edges) measured_by_plan += e.method != planner::EdgeMethod::none;
+  for (const std::string& n : plan.notes) notes.push_back(n);
+  return {{"features",
+           {{"edge_points", model.features.points.size()},
+            {"probeable", measured_by_plan},
+            {"convex", probeable},
+            {"holes", model.features.holes.size()}}},
+          {"touches", plan.program.touches.size()},
+          {"tip", machine.active_tip},
+          {"probe_radius", machine.tip().ball_radius_mm},
+          {"estimate", {{"time_s", plan.program.time_s}, {"lower_bound_s", plan.program.lower_bound_s}}},
+          {"dry_run",
+           {{"time_s", cmm.status().t_s - homed_at_s},
+            {"touches", plan.program.touches.size()},
+            {"contacts", contacts},
+            {"misses", misses},
+            {"early_triggers", early},
+            {"out_of_travel", out_of_travel},
+            {"other_faults", other},
+            {"problems", problems}}},
+          {"notes", notes}};
+}
+
+}  // namespace cmm::daemon

@@ -1,0 +1,43 @@
+#include "daemon/touch_motion.hpp"
+
+#include <algorithm>
+
+namespace cmm::daemon {
+
+namespace {
+
+void rise(hal::Cmm& cmm, double clearance_z, const TouchSpeeds& speeds) {
+  const hal::Vec3 at = cmm.status().position;
+  if (at.z() < clearance_z) cmm.move({hal::Vec3(at.x(), at.y(), clearance_z), speeds.travel_mm_s});
+}
+
+}  // namespace
+
+hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds) {
+  rise(cmm, clearance_z, speeds);
+  const hal::Vec3 above(touch.start.x(), touch.start.y(), std::max(clearance_z, cmm.status().position.z()));
+  cmm.move({above, speeds.travel_mm_s});
+  cmm.move({touch.start, speeds.travel_mm_s});
+  hal::ProbeMove search;
+  search.start = touch.start;
+  search.direction = touch.direction;
+  search.max_travel_mm = touch.max_travel_mm;
+  search.speed_mm_s = speeds.probe_mm_s;
+  search.retract_mm = touch.retract_mm;
+  search.fail_on_miss = false;  // a miss is a result for this point, not a reason to stop the job
+  // Refuse a trigger in the first fifth of the run-up: the part is then far from where the plan put it.
+  search.min_travel_mm = std::min(0.2 * touch.max_travel_mm, 0.5);
+  return cmm.probe(search);
+}
+
+void leave_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds) {
+  const hal::Vec3 at = cmm.status().position;
+  const hal::Vec3 from_start = at - touch.start;
+  const double along = from_start.dot(touch.direction);
+  // Only when the ball is on the search line (stopped mid-search, or after its retract).
+  if ((from_start - along * touch.direction).norm() < 1e-3 && along > 1e-6)
+    cmm.move({touch.start, speeds.probe_mm_s});
+  rise(cmm, clearance_z, speeds);
+}
+
+}  // namespace cmm::daemon
