@@ -1,7 +1,208 @@
-// cmmd: the control daemon (placeholder until the service lands in issue 6).
+// cmmd: the CMM control daemon. Reads cmmd.json, brings up the machine driver, serves JSON-RPC over
+// TCP and a Unix socket, runs jobs one at a time, and tells systemd how it is doing.
+#include <CLI/CLI.hpp>
+#include <asio.hpp>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <iostream>
+#include <mutex>
+#include <thread>
 
-int main() {
-  std::cout << "cmmd: not yet\n";
-  return 1;
+#include <spdlog/spdlog.h>
+
+#include "daemon/daemon_config.hpp"
+#include "daemon/driver_factory.hpp"
+#include "daemon/job_manager.hpp"
+#include "daemon/job_store.hpp"
+#include "daemon/machine_link.hpp"
+#include "daemon/model_store.hpp"
+#include "daemon/rpc_server.hpp"
+#include "daemon/service_methods.hpp"
+#include "daemon/service_notifier.hpp"
+#include "hal/config_block.hpp"
+
+#ifndef CMMD_VERSION
+#define CMMD_VERSION "0.0.0"
+#endif
+
+namespace {
+
+using namespace cmm;
+using namespace cmm::daemon;
+
+// Under systemd the journal adds time and unit; a terminal wants the time.
+void set_up_logging(const std::string& level) {
+  if (std::getenv("JOURNAL_STREAM") != nullptr) spdlog::set_pattern("%l: %v");
+  else spdlog::set_pattern("[%Y-%m-%d %H:%M:%S.%e] [%l] %v");
+  spdlog::set_level(spdlog::level::from_str(level));
+}
+
+// Polls the machine off the event loop (a Modbus status can wait for its timeout), tells subscribers
+// and systemd's STATUS when the link or a fault changes, and brings a lost link back when no job or
+// command holds the machine. Never the watchdog: an unplugged cable must not restart cmmd.
+class MachineMonitor {
+ public:
+  MachineMonitor(MachineLink& machine, JobManager& jobs, RpcServer& server, ServiceNotifier& notifier)
+      : machine_(machine), jobs_(jobs), server_(server), notifier_(notifier), thread_([this] { loop(); }) {}
+  ~MachineMonitor() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+
+ private:
+  void loop() {
+    std::unique_lock lock(mutex_);
+    nlohmann::json last;
+    int polls = 0;
+    while (!stop_) {
+      lock.unlock();
+      nlohmann::json s = machine_.status_json();
+      if (s["link"] == "down" && !machine_.holder() && polls % 4 == 0) {
+        try {
+          machine_.bring_up();
+          s = machine_.status_json();
+        } catch (const std::exception& e) {
+          spdlog::debug("machine not reachable: {}", e.what());
+        }
+      }
+      const nlohmann::json state = {{"lifecycle", s["lifecycle"]}, {"link", s["link"]}, {"fault", s["fault"]}};
+      if (state != last) {
+        spdlog::info("machine: {} ({}){}", s["link"].get<std::string>(), s["lifecycle"].get<std::string>(),
+                     s["fault"].is_null() ? "" : ", " + s["fault"]["kind"].get<std::string>());
+        server_.notify("machine", "machine.state", state);
+        last = state;
+      }
+      const auto job = jobs_.running_job();
+      notifier_.status("machine " + s["link"].get<std::string>() + " (" + s["lifecycle"].get<std::string>() + ")" +
+                       (job ? ", running job " + std::to_string(*job) : std::string(", idle")));
+      ++polls;
+      lock.lock();
+      wake_.wait_for(lock, std::chrono::milliseconds(500), [this] { return stop_; });
+    }
+  }
+
+  MachineLink& machine_;
+  JobManager& jobs_;
+  RpcServer& server_;
+  ServiceNotifier& notifier_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+int serve(const std::filesystem::path& config_file, DaemonConfig config) {
+  set_up_logging(config.log_level);
+  ServiceNotifier notifier;
+  std::filesystem::create_directories(config.state_dir);
+  if (!config.server.unix_path.empty())
+    std::filesystem::create_directories(std::filesystem::path(config.server.unix_path).parent_path());
+  const std::string base_dir = config_file.empty() ? "." : config_file.parent_path().string();
+  MachineLink machine(make_driver(config.driver, base_dir), config.machine, config.driver);
+  ModelStore models(config.state_dir / "models", config.models_dir);
+  JobStore store(config.state_dir / "jobs");
+
+  asio::io_context io;
+  RpcDispatcher dispatcher;
+  std::unique_ptr<RpcServer> server;
+  JobManager jobs(
+      config, machine, models, store,
+      [&server](const std::string& topic, const std::string& method, const nlohmann::json& params) {
+        if (server) server->notify(topic, method, params);
+      },
+      CMMD_VERSION);
+  Service service{config, machine, models, jobs, CMMD_VERSION};
+  add_service_methods(dispatcher, service);
+  server = std::make_unique<RpcServer>(io, dispatcher, config.server);
+  server->start();
+  jobs.start();
+  MachineMonitor monitor(machine, jobs, *server, notifier);
+
+  asio::signal_set signals(io, SIGINT, SIGTERM, SIGHUP);
+  std::function<void(const asio::error_code&, int)> on_signal = [&](const asio::error_code& ec, int signal) {
+    if (ec) return;
+    if (signal == SIGHUP) {
+      notifier.reloading();
+      try {
+        const DaemonConfig next = read_daemon_config(config_file);
+        for (const std::string& part : changes_needing_restart(config, next))
+          spdlog::warn("SIGHUP: {} changed; it takes effect after a restart", part);
+        spdlog::set_level(spdlog::level::from_str(next.log_level));
+        server->set_tokens(next.server.tokens);
+        spdlog::info("SIGHUP: reloaded {} (log level {}, {} token(s))", config_file.string(), next.log_level,
+                     next.server.tokens.size());
+      } catch (const hal::ConfigError& e) {
+        spdlog::error("SIGHUP: {} refused, running on: {}", config_file.string(), e.what());
+      }
+      notifier.ready("ready");
+      signals.async_wait(on_signal);
+      return;
+    }
+    spdlog::info("signal {}: stopping the machine and shutting down", signal);
+    notifier.stopping();
+    server->stop();
+    io.stop();
+  };
+  signals.async_wait(on_signal);
+  notifier.start_watchdog(io);
+
+  const nlohmann::json ready = {{"ready", true},
+                                {"tcp", config.server.tcp_enabled ? nlohmann::json(server->tcp_port()) : nlohmann::json(nullptr)},
+                                {"unix", config.server.unix_path},
+                                {"state_dir", config.state_dir.string()},
+                                {"driver", config.driver}};
+  std::cout << ready.dump() << std::endl;
+  spdlog::info("cmmd {} ready: tcp {}:{}, unix {}, state {}, driver {}", CMMD_VERSION, config.server.tcp_bind,
+               server->tcp_port(), config.server.unix_path, config.state_dir.string(), config.driver);
+  notifier.ready("ready; machine driver " + config.driver);
+  io.run();
+
+  notifier.stop_watchdog();
+  jobs.shutdown();  // stops the machine under a running job, which becomes interrupted
+  try {
+    machine.cmm().stop();
+  } catch (const std::exception&) {
+  }
+  spdlog::info("cmmd stopped");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"cmmd: control daemon for coordinate measuring machines (docs/api.md)"};
+  std::string config_file = "/etc/cmmd/cmmd.json";
+  std::string state_dir, runtime_dir;
+  int tcp_port = -1;
+  bool check = false;
+  app.add_option("-c,--config", config_file, "cmmd.json to read");
+  app.add_option("--state-dir", state_dir, "state folder (overrides the config and $STATE_DIRECTORY)");
+  app.add_option("--runtime-dir", runtime_dir, "folder of the Unix socket (overrides the config and $RUNTIME_DIRECTORY)");
+  app.add_option("--tcp-port", tcp_port, "TCP port (0: any free one, printed in the ready line)")->check(CLI::Range(0, 65535));
+  app.add_flag("--check", check, "validate the config and exit");
+  app.set_version_flag("--version", std::string("cmmd ") + CMMD_VERSION);
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (!state_dir.empty()) setenv("STATE_DIRECTORY", state_dir.c_str(), 1);
+    if (!runtime_dir.empty()) setenv("RUNTIME_DIRECTORY", runtime_dir.c_str(), 1);
+    DaemonConfig config = read_daemon_config(config_file);
+    if (tcp_port >= 0) config.server.tcp_port = tcp_port;
+    if (check) {
+      std::cout << config_file << ": valid\n";
+      return 0;
+    }
+    return serve(std::filesystem::absolute(config_file), std::move(config));
+  } catch (const hal::ConfigError& e) {
+    std::cerr << "cmmd: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "cmmd: " << e.what() << "\n";
+    return 1;
+  }
 }

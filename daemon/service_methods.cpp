@@ -1,0 +1,185 @@
+#include "daemon/service_methods.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "daemon/plan_preview.hpp"
+#include "hal/fault.hpp"
+#include "hal/qualification.hpp"
+#include "planner/registration.hpp"
+
+namespace cmm::daemon {
+
+namespace {
+
+[[noreturn]] void bad_param(const std::string& path, const std::string& message) {
+  throw RpcError(rpc_code::invalid_params, path + ": " + message, {{"path", path}});
+}
+
+int job_id(const nlohmann::json& params) {
+  if (!params.is_object() || !params.contains("job") || !params["job"].is_number_integer())
+    bad_param("/job", "must be a job id (integer)");
+  return params["job"].get<int>();
+}
+
+std::string text(const nlohmann::json& params, const char* key, const std::string& fallback) {
+  if (!params.is_object() || !params.contains(key)) return fallback;
+  if (!params[key].is_string()) bad_param(std::string("/") + key, "must be a string");
+  return params[key].get<std::string>();
+}
+
+// Runs a manual machine command with the machine to itself, faults as −32013 with their kind.
+template <class F>
+nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
+  std::optional<MachineLink::Lease> lease = s.machine.try_lease(what);
+  if (!lease) {
+    const std::string holder = s.machine.holder().value_or("another command");
+    throw RpcError(rpc_code::machine_busy, "the machine is busy: " + holder + " holds it", {{"holder", holder}});
+  }
+  try {
+    s.machine.bring_up();
+    return f(s.machine.cmm());
+  } catch (const hal::Fault& fault) {
+    throw RpcError(rpc_code::machine_fault, what + ": " + fault.what(), {{"kind", hal::to_string(fault.kind())}});
+  } catch (const hal::StateError& e) {
+    throw RpcError(rpc_code::invalid_state, what + ": " + e.what());
+  }
+}
+
+nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+void add_machine_methods(RpcDispatcher& d, Service& s) {
+  d.add("machine.status", {Role::observer, true, [&s](const nlohmann::json&, RpcContext&) {
+          nlohmann::json j = s.machine.status_json();
+          if (const auto running = s.jobs.running_job()) j["job"] = *running;
+          return j;
+        }});
+  d.add("machine.home", {Role::operator_, true, [&s](const nlohmann::json&, RpcContext&) {
+          return with_machine(s, "machine.home", [](hal::Cmm& cmm) {
+            cmm.home();
+            return nlohmann::json{{"position", vec(cmm.status().position)}};
+          });
+        }});
+  // stop and abort run on the io thread: they must never wait behind a slow method.
+  d.add("machine.stop", {Role::operator_, false, [&s](const nlohmann::json&, RpcContext& ctx) {
+          spdlog::warn("machine.stop from {}", ctx.peer());
+          s.jobs.machine_stopped();
+          try {
+            s.machine.cmm().stop();
+          } catch (const hal::Fault& f) {
+            throw RpcError(rpc_code::machine_fault, std::string("stop: ") + f.what(), {{"kind", hal::to_string(f.kind())}});
+          } catch (const hal::StateError&) {
+            // Not connected: nothing moves that could be stopped.
+          }
+          return nlohmann::json::object();
+        }});
+  d.add("machine.abort", {Role::operator_, false, [&s](const nlohmann::json&, RpcContext& ctx) {
+          spdlog::warn("machine.abort from {}", ctx.peer());
+          s.jobs.machine_stopped();
+          try {
+            s.machine.cmm().abort();
+          } catch (const hal::Fault& f) {
+            throw RpcError(rpc_code::machine_fault, std::string("abort: ") + f.what(), {{"kind", hal::to_string(f.kind())}});
+          } catch (const hal::StateError&) {
+          }
+          return nlohmann::json::object();
+        }});
+  d.add("machine.reset", {Role::operator_, true, [&s](const nlohmann::json&, RpcContext&) {
+          return with_machine(s, "machine.reset", [](hal::Cmm& cmm) {
+            cmm.reset();
+            return nlohmann::json::object();
+          });
+        }});
+  d.add("machine.qualify", {Role::operator_, true, [&s](const nlohmann::json& params, RpcContext&) {
+          const std::string tip = text(params, "tip", "");
+          return with_machine(s, "machine.qualify", [&](hal::Cmm& cmm) {
+            if (!cmm.status().homed) cmm.home();
+            const std::string id = tip.empty() ? cmm.info().active_tip : tip;
+            const hal::TipQualification q = hal::qualify(cmm, id);
+            spdlog::info("tip {} qualified: r {:.5f} mm, rms {:.5f} mm", id, q.ball_radius_mm, q.residual_rms_mm);
+            return nlohmann::json{{"tip", id},
+                                  {"ball_radius_mm", q.ball_radius_mm},
+                                  {"offset", vec(q.offset)},
+                                  {"residual_rms_mm", q.residual_rms_mm},
+                                  {"touches", q.touches},
+                                  {"time_utc", q.time_utc}};
+          });
+        }});
+}
+
+void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
+  d.add("model.upload", {Role::operator_, true, [&s](const nlohmann::json& p, RpcContext&) {
+          if (!p.is_object()) bad_param("", "params must be an object");
+          UploadChunk chunk;
+          chunk.name = text(p, "name", "");
+          chunk.sha256_hex = text(p, "sha256", "");
+          chunk.data_base64 = text(p, "data", "");
+          for (const char* key : {"size", "offset"})
+            if (!p.contains(key) || !p[key].is_number_unsigned()) bad_param(std::string("/") + key, "must be a byte count");
+          chunk.size = p["size"].get<std::uint64_t>();
+          chunk.offset = p["offset"].get<std::uint64_t>();
+          const UploadStatus st = s.models.upload(chunk);
+          return nlohmann::json{{"model", st.model}, {"received", st.received}, {"complete", st.complete}};
+        }});
+  d.add("plan.preview", {Role::observer, true, [&s](const nlohmann::json& p, RpcContext&) {
+          std::optional<hal::MachineInfo> info;
+          try {
+            s.machine.bring_up();
+            info = s.machine.cmm().info();
+          } catch (const std::exception& e) {
+            spdlog::info("plan.preview without the machine's tips: {}", e.what());
+          }
+          return preview_plan(p, s.config, s.models, info ? &*info : nullptr);
+        }});
+  d.add("registration.fit", {Role::observer, true, [&s](const nlohmann::json& p, RpcContext&) {
+          try {
+            nlohmann::json input = p;
+            if (!input.contains("plate")) input["plate"] = planner::to_json(s.config.plate);
+            const planner::RegistrationResult r =
+                planner::fit_registration(planner::registration_from_json(input, "registration.fit"));
+            return planner::to_json(r);
+          } catch (const planner::RegistrationError& e) {
+            throw RpcError(rpc_code::registration_error, e.what(), {{"corners", e.corners()}});
+          } catch (const RpcError&) {
+            throw;
+          } catch (const std::exception& e) {
+            throw RpcError(rpc_code::invalid_params, e.what());
+          }
+        }});
+}
+
+void add_job_methods(RpcDispatcher& d, Service& s) {
+  d.add("job.submit", {Role::operator_, true, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.submit(p); }});
+  d.add("job.get", {Role::observer, false, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.get(job_id(p)); }});
+  d.add("job.list", {Role::observer, false, [&s](const nlohmann::json&, RpcContext&) { return s.jobs.list(); }});
+  d.add("job.pause", {Role::operator_, false, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.pause(job_id(p)); }});
+  d.add("job.resume", {Role::operator_, false, [&s](const nlohmann::json& p, RpcContext&) {
+          bool reregister = false;
+          if (p.contains("reregister")) {
+            if (!p["reregister"].is_boolean()) bad_param("/reregister", "must be true or false");
+            reregister = p["reregister"].get<bool>();
+          }
+          return s.jobs.resume(job_id(p), reregister);
+        }});
+  d.add("job.cancel", {Role::operator_, false, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.cancel(job_id(p)); }});
+  d.add("job.result", {Role::observer, true, [&s](const nlohmann::json& p, RpcContext&) {
+          return s.jobs.result(job_id(p), text(p, "format", "json"));
+        }});
+}
+
+}  // namespace
+
+void add_service_methods(RpcDispatcher& dispatcher, Service& service) {
+  dispatcher.add("server.info", {Role::none, false, [&service, &dispatcher](const nlohmann::json&, RpcContext& ctx) {
+                   return nlohmann::json{{"name", "cmmd"},
+                                         {"version", service.version},
+                                         {"api", "cmmd.api/1"},
+                                         {"role", to_string(ctx.role())},
+                                         {"driver", service.machine.driver()},
+                                         {"methods", dispatcher.methods()}};
+                 }});
+  add_machine_methods(dispatcher, service);
+  add_model_and_plan_methods(dispatcher, service);
+  add_job_methods(dispatcher, service);
+}
+
+}  // namespace cmm::daemon
