@@ -1,0 +1,129 @@
+#include "cmmd_instance.hpp"
+
+#include <signal.h>
+
+#include <chrono>
+#include <fstream>
+#include <stdexcept>
+
+#include "daemon/model_upload.hpp"
+#include "tests/tools/run_command.hpp"
+
+namespace cmm::testing {
+
+namespace {
+
+void write_json(const std::filesystem::path& file, const nlohmann::json& j) {
+  std::ofstream out(file);
+  out << j.dump(1) << "\n";
+  if (!out.flush()) throw std::runtime_error("cannot write " + file.string());
+}
+
+nlohmann::json read_json(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("cannot read " + file.string());
+  return nlohmann::json::parse(in);
+}
+
+}  // namespace
+
+CmmdInstance::CmmdInstance(std::filesystem::path folder, nlohmann::json machine, nlohmann::json extra)
+    : folder_(std::move(folder)) {
+  std::filesystem::create_directories(folder_);
+  config_ = {{"server", {{"tcp_port", 0}, {"unix_socket", "cmmd.sock"}}},
+             {"state_dir", "state"},
+             {"runtime_dir", "run"},
+             {"machine", std::move(machine)},
+             {"log", {{"level", "warn"}}}};
+  config_.merge_patch(extra);
+  write_json(folder_ / "cmmd.json", config_);
+}
+
+CmmdInstance::~CmmdInstance() = default;
+
+void CmmdInstance::start() {
+  process_ = std::make_unique<ChildProcess>(
+      std::vector<std::string>{CMMD_BINARY_DIR "/daemon/cmmd", "--config", (folder_ / "cmmd.json").string()});
+  const nlohmann::json ready = nlohmann::json::parse(process_->read_line(60));
+  if (!ready.value("ready", false)) throw std::runtime_error("cmmd: " + ready.dump());
+  tcp_port_ = ready["tcp"].is_number() ? ready["tcp"].get<int>() : 0;
+}
+
+void CmmdInstance::kill9() {
+  process_->signal(SIGKILL);
+  process_->wait();
+  process_.reset();
+}
+
+int CmmdInstance::terminate() {
+  process_->signal(SIGTERM);
+  const int status = process_->wait();
+  process_.reset();
+  return status;
+}
+
+daemon::RpcClient CmmdInstance::client() const {
+  return daemon::RpcClient::connect("unix:" + (folder_ / "run" / "cmmd.sock").string());
+}
+
+daemon::RpcClient CmmdInstance::tcp_client() const {
+  return daemon::RpcClient::connect("tcp://127.0.0.1:" + std::to_string(tcp_port_));
+}
+
+std::filesystem::path CmmdInstance::job_folder(int id) const {
+  char name[16];
+  std::snprintf(name, sizeof name, "%06d", id);
+  return folder_ / "state" / "jobs" / name;
+}
+
+int submit_job(daemon::RpcClient& client, const std::filesystem::path& model, const nlohmann::json& request) {
+  nlohmann::json params = request;
+  params["model"] = daemon::upload_model(client, model, 256 * 1024);
+  return client.call("job.submit", params, 120).at("id").get<int>();
+}
+
+nlohmann::json wait_for_job(daemon::RpcClient& client, int job, const std::set<std::string>& states, double timeout_s) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  client.call("server.subscribe", {{"topics", {"job"}}});
+  nlohmann::json record = client.call("job.get", {{"job", job}});
+  for (;;) {
+    const std::string state = record.at("state").get<std::string>();
+    if (states.contains(state)) return record;
+    if (state == "done" || state == "failed" || state == "cancelled")
+      throw std::runtime_error("job " + std::to_string(job) + " ended " + state + ": " + record.dump());
+    if (std::chrono::steady_clock::now() > deadline)
+      throw std::runtime_error("job " + std::to_string(job) + " still " + state + " after the timeout: " + record.dump());
+    // A state change arrives as a notification; the poll catches one sent before the subscription.
+    client.wait_notification(0.5);
+    record = client.call("job.get", {{"job", job}});
+  }
+}
+
+nlohmann::json sample_sim_block() {
+  return {{"driver", "sim"},
+          {"part", {{"analytic", "case3_block"}, {"edge_length_mm", 2}}},
+          {"plate_pose", {{"rotation_deg", {0, 0, 7}}, {"translation", {180, 260, 0}}}},
+          {"part_pose", {{"rotation_deg", {0, 0, -4}}, {"translation", {55, 25, 0}}}},
+          {"trigger_sigma_mm", 0.001},
+          {"seed", 7}};
+}
+
+std::filesystem::path sample_scan(const std::filesystem::path& folder) {
+  const std::filesystem::path mesh = folder / "scan.ply", corners = folder / "plate_corners.json",
+                              sim = folder / "sim.json";
+  if (std::filesystem::exists(mesh)) return mesh;
+  std::filesystem::create_directories(folder);
+  write_json(sim, sample_sim_block());
+  const auto r = cmm::test::run_command(std::string(CMMD_BINARY_DIR "/sim/cmm-scan") + " --sim-config " + sim.string() +
+                                        " --edge-length 1 --noise 0.05 --mesh " + mesh.string() + " --plate-corners " +
+                                        corners.string());
+  if (r.exit_code != 0) throw std::runtime_error("cmm-scan failed: " + r.output);
+  return mesh;
+}
+
+nlohmann::json sample_measure_plate(const std::filesystem::path& folder) {
+  sample_scan(folder);
+  return {{"measure_plate", read_json(folder / "plate_corners.json")}};
+}
+
+}  // namespace cmm::testing

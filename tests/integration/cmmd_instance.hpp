@@ -1,0 +1,57 @@
+// A real cmmd started by a test: its own config, state and socket folders under one temp folder, a
+// restart that keeps them (for crash tests), and RPC clients over its Unix socket or TCP port.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "child_process.hpp"
+#include "daemon/rpc_client.hpp"
+
+namespace cmm::testing {
+
+class CmmdInstance {
+ public:
+  // `machine` is cmmd.json's machine block; `extra` is merged over the rest of the config.
+  CmmdInstance(std::filesystem::path folder, nlohmann::json machine, nlohmann::json extra = nlohmann::json::object());
+  ~CmmdInstance();
+
+  void start();             // spawns cmmd and waits for its ready line
+  void kill9();             // SIGKILL, reaped
+  int terminate();          // SIGTERM; its exit status
+  bool running() const { return process_ != nullptr; }
+  ChildProcess& process() { return *process_; }
+
+  daemon::RpcClient client() const;      // over the Unix socket (operator)
+  daemon::RpcClient tcp_client() const;  // over TCP
+  int tcp_port() const { return tcp_port_; }
+  const std::filesystem::path& folder() const { return folder_; }
+  std::filesystem::path job_folder(int id) const;
+  const nlohmann::json& config() const { return config_; }
+
+ private:
+  std::filesystem::path folder_;
+  nlohmann::json config_;
+  std::unique_ptr<ChildProcess> process_;
+  int tcp_port_ = 0;
+};
+
+// Uploads a file and submits a job on it; returns the job id.
+int submit_job(daemon::RpcClient& client, const std::filesystem::path& model, const nlohmann::json& request);
+
+// Polls job.get until the job is in one of `states` (or final, which then must be one of them);
+// returns its record. Throws std::runtime_error with the record after timeout_s.
+nlohmann::json wait_for_job(daemon::RpcClient& client, int job, const std::set<std::string>& states, double timeout_s);
+
+// The simulator's sample setup shared by the daemon tests: case-3 block on the default plate.
+nlohmann::json sample_sim_block();
+// The measure_plate registration for sample_sim_block, as cmm-scan --plate-corners would write it.
+nlohmann::json sample_measure_plate(const std::filesystem::path& folder);
+// A scanned reference mesh of the sample part (cmm-scan), written once into `folder`.
+std::filesystem::path sample_scan(const std::filesystem::path& folder);
+
+}  // namespace cmm::testing
