@@ -101,7 +101,7 @@ nlohmann::json wait_for_job(daemon::RpcClient& client, int job, const std::set<s
 
 nlohmann::json sample_sim_block() {
   return {{"driver", "sim"},
-          {"part", {{"analytic", "case3_block"}, {"edge_length_mm", 2}}},
+          {"part", {{"analytic", "case3_block"}, {"edge_length_mm", 0.25}}},  // rims faceted to < 2 µm
           {"plate_pose", {{"rotation_deg", {0, 0, 7}}, {"translation", {180, 260, 0}}}},
           {"part_pose", {{"rotation_deg", {0, 0, -4}}, {"translation", {55, 25, 0}}}},
           {"trigger_sigma_mm", 0.001},
