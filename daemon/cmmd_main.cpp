@@ -63,14 +63,15 @@ class MachineMonitor {
     while (!stop_) {
       lock.unlock();
       nlohmann::json s = machine_.status_json();
-      if (s["link"] == "down" && !machine_.holder() && polls % 4 == 0) {
-        try {
-          machine_.bring_up();
-          s = machine_.status_json();
-        } catch (const std::exception& e) {
-          spdlog::debug("machine not reachable: {}", e.what());
+      if (s["link"] == "down" && polls % 4 == 0)
+        if (const auto lease = machine_.try_lease("reconnect")) {  // never under a job or a command
+          try {
+            machine_.bring_up();
+            s = machine_.status_json();
+          } catch (const std::exception& e) {
+            spdlog::debug("machine not reachable: {}", e.what());
+          }
         }
-      }
       const nlohmann::json state = {{"lifecycle", s["lifecycle"]}, {"link", s["link"]}, {"fault", s["fault"]}};
       if (state != last) {
         spdlog::info("machine: {} ({}){}", s["link"].get<std::string>(), s["lifecycle"].get<std::string>(),
@@ -146,6 +147,13 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
     }
     spdlog::info("signal {}: stopping the machine and shutting down", signal);
     notifier.stopping();
+    // The job first, so the stop reads as a shutdown (the job becomes interrupted, not paused);
+    // then the machine, so a manual command a worker is blocked in returns before the server joins it.
+    jobs.shutdown();
+    try {
+      machine.cmm().stop();
+    } catch (const std::exception&) {
+    }
     server->stop();
     io.stop();
   };
@@ -164,11 +172,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
   io.run();
 
   notifier.stop_watchdog();
-  jobs.shutdown();  // stops the machine under a running job, which becomes interrupted
-  try {
-    machine.cmm().stop();
-  } catch (const std::exception&) {
-  }
+  jobs.shutdown();  // already done by the signal; here for a loop that ended otherwise
   spdlog::info("cmmd stopped");
   return 0;
 }

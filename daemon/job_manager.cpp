@@ -249,7 +249,7 @@ nlohmann::json JobManager::result(int id, const std::string& format) const {
   if (format == "csv") {
     const std::optional<std::string> csv = store_.read_file(id, "result.csv");
     if (!csv) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.csv");
-    return {{"csv", *csv}};
+    return {{"csv", *csv}, {"holes_csv", store_.read_file(id, "result.holes.csv").value_or("")}};
   }
   if (format != "json") throw RpcError(rpc_code::invalid_params, "format must be json or csv", {{"path", "/format"}});
   const std::optional<std::string> text = store_.read_file(id, "result.json");
