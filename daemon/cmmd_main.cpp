@@ -64,7 +64,7 @@ class MachineMonitor {
       lock.unlock();
       nlohmann::json s = machine_.status_json();
       if (s["link"] == "down" && polls % 4 == 0)
-        if (const auto lease = machine_.try_lease("reconnect")) {  // never under a job or a command
+        if (const auto lease = machine_.try_lease(MachineLink::kReconnectHolder)) {  // never under a job or a command
           try {
             machine_.bring_up();
             s = machine_.status_json();
@@ -105,7 +105,8 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
   if (!config.server.unix_path.empty())
     std::filesystem::create_directories(std::filesystem::path(config.server.unix_path).parent_path());
   const std::string base_dir = config_file.empty() ? "." : config_file.parent_path().string();
-  MachineLink machine(make_driver(config.driver, base_dir), config.machine, config.driver);
+  MachineLink machine(make_driver(config.driver, base_dir), config.machine, config.driver,
+                      config.state_dir / "touch_in_progress.json");
   ModelStore models(config.state_dir / "models", config.models_dir);
   JobStore store(config.state_dir / "jobs");
 

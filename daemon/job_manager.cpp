@@ -202,7 +202,7 @@ nlohmann::json JobManager::pause(int id) {
   if (is_final(job.record.state) || is_resumable(job.record.state))
     throw RpcError(rpc_code::invalid_state, "job " + std::to_string(id) + " is " + to_string(job.record.state),
                    {{"state", to_string(job.record.state)}});
-  if (running_ == id) job.control.pause = true;  // held after the current touch
+  if (running_ == id && is_running(job.record.state)) job.control.pause = true;  // held after the current touch
   else set_state(job, JobState::paused, "operator pause", std::nullopt);
   return record_json(job.record);
 }
@@ -226,7 +226,7 @@ nlohmann::json JobManager::cancel(int id) {
   if (is_final(job.record.state))
     throw RpcError(rpc_code::invalid_state, "job " + std::to_string(id) + " is already " + to_string(job.record.state),
                    {{"state", to_string(job.record.state)}});
-  if (running_ == id) {
+  if (running_ == id && is_running(job.record.state)) {
     job.control.cancel = true;
     try {
       machine_.cmm().stop();

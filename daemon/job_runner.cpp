@@ -4,6 +4,7 @@
 #include <map>
 #include <set>
 
+#include "daemon/atomic_file.hpp"
 #include "daemon/job_planning.hpp"
 #include "daemon/job_result.hpp"
 #include "daemon/rpc_error.hpp"
@@ -12,6 +13,8 @@
 #include "hal/fault.hpp"
 #include "hal/utc_time.hpp"
 #include "planner/corner_probing.hpp"
+
+#include <spdlog/spdlog.h>
 
 namespace cmm::daemon {
 
@@ -41,27 +44,46 @@ struct JobRunner::Registration {
 JobRunner::JobRunner(RunEnvironment env, int job_id, JobRequest request, JobControl& control, JobSink sink)
     : env_(env), id_(job_id), request_(std::move(request)), control_(control), sink_(std::move(sink)) {}
 
-void JobRunner::check_control() const {
+void JobRunner::check_stop() const {
   if (control_.shutdown) throw Held{JobState::interrupted, "cmmd stopped during the job"};
   if (control_.cancel) throw Held{JobState::cancelled, "cancelled by the operator"};
   if (control_.operator_stop) throw Held{JobState::paused, "operator stop"};
+}
+
+void JobRunner::check_control() const {
+  check_stop();
   if (control_.pause) throw Held{JobState::paused, "operator pause"};
 }
 
-// Up, reset and homed as the run needs; a touch cut short by the last run is left the way it came.
+// One touch, its search line recorded first so that whoever moves next after a stop leaves along it.
+hal::TouchResult JobRunner::touch(const planner::Touch& t, double clearance_z, double probe_speed_mm_s) {
+  env_.machine.enter_touch({t.start, t.direction});
+  const hal::TouchResult r =
+      run_touch(env_.machine.cmm(), t, clearance_z, {0, probe_speed_mm_s}, [this] { check_stop(); });
+  env_.machine.left_touch();
+  return r;
+}
+
+// Up, reset and homed as the run needs; a touch a stop cut short is left the way it came in.
 void JobRunner::prepare_machine(bool rehome) {
   env_.machine.bring_up();
   hal::Cmm& cmm = env_.machine.cmm();
   hal::MachineStatus s = cmm.status();
-  // The operator asked to go on: that is the word a latched abort or a released e-stop waits for.
+  // The operator asked to go on (job.resume): that is the word a latched abort or a released
+  // e-stop waits for (docs/api.md).
   if (s.aborted || s.estop) {
     cmm.reset();
     s = cmm.status();
   }
-  const planner::MachineDescription& d = env_.config.description;
-  if (!rehome && s.homed && touch_in_progress_) leave_touch(cmm, *touch_in_progress_, d.clearance_z, {0, d.probe_speed_mm_s});
-  touch_in_progress_.reset();
-  if (rehome || !s.homed) cmm.home();
+  finish_touch_safely();
+  if (const auto line = env_.machine.touch_in_progress(); line && !s.homed)
+    // Homing raises z first: from a search line that is at most δ + pre-travel + overtravel off the
+    // vertical the ball came down on, which the plan checked.
+    spdlog::warn("job {}: homing with the probe possibly on a search line (its position is lost)", id_);
+  if (rehome || !s.homed) {
+    cmm.home();
+    env_.machine.left_touch();
+  }
 }
 
 JobRunner::Registration JobRunner::measure_plate(double radius_mm) {
@@ -76,9 +98,7 @@ JobRunner::Registration JobRunner::measure_plate(double radius_mm) {
   for (std::size_t i = 0; i < touches.size(); ++i) {
     check_control();
     sink_.progress({"registering", static_cast<int>(i), static_cast<int>(touches.size()), 0});
-    touch_in_progress_ = touches[i];
-    const hal::TouchResult r = run_touch(env_.machine.cmm(), touches[i], d.clearance_z, {0, d.probe_speed_mm_s});
-    touch_in_progress_.reset();
+    const hal::TouchResult r = touch(touches[i], d.clearance_z, d.probe_speed_mm_s);
     if (!r.contact)
       throw RpcError(rpc_code::registration_error,
                      "plate touch " + std::to_string(touches[i].id) + " (" + planner::to_string(touches[i].target) +
@@ -122,6 +142,17 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
       return reg;
     }
   sink_.state(JobState::registering, "", std::nullopt);
+  if (reregister) {
+    // A new T_M_S makes a new plan whose touch ids need not match the journal's: keep the old
+    // touches aside, start the journal and the plan afresh.
+    const std::filesystem::path folder = env_.store.folder(id_);
+    const std::string stamp = hal::utc_now();
+    std::error_code ignored;
+    if (std::filesystem::exists(folder / "touches.jsonl"))
+      std::filesystem::rename(folder / "touches.jsonl", folder / ("touches.before-" + stamp + ".jsonl"), ignored);
+    std::filesystem::remove(folder / "plan.json", ignored);
+    sync_folder(folder);
+  }
   Registration reg;
   try {
     if (request_.measure) {
@@ -146,13 +177,18 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
 }
 
 void JobRunner::finish_touch_safely() {
-  if (!touch_in_progress_) return;
+  const std::optional<SearchLine> line = env_.machine.touch_in_progress();
+  if (!line) return;
   try {
+    // A stop dropped the driver to connected; enable it again to move out the way the ball came.
+    env_.machine.bring_up();
+    const hal::MachineStatus s = env_.machine.cmm().status();
+    if (!s.homed || s.aborted || s.estop) return;  // it cannot move now; the next mover leaves the line
     const planner::MachineDescription& d = env_.config.description;
-    leave_touch(env_.machine.cmm(), *touch_in_progress_, d.clearance_z, {0, d.probe_speed_mm_s});
-    touch_in_progress_.reset();
-  } catch (const std::exception&) {
-    // The machine refused to move (a latched abort, a lost link): the resume leaves the touch instead.
+    leave_touch(env_.machine.cmm(), line->start, line->direction, d.clearance_z, {0, d.probe_speed_mm_s});
+    env_.machine.left_touch();
+  } catch (const std::exception& e) {
+    spdlog::warn("job {}: could not leave the touch in progress: {}", id_, e.what());
   }
 }
 
@@ -174,9 +210,9 @@ void JobRunner::run(bool rehome, bool reregister) {
         machine.active_tip = t.id;
       }
     if (machine.active_tip != info.active_tip)
-      throw RpcError(rpc_code::invalid_state, "job " + std::to_string(id_) + " was registered with tip " +
-                                                  machine.active_tip + " but the machine's active tip is " +
-                                                  info.active_tip + ": select it again, or resume with reregister");
+      throw Held{JobState::paused, "job " + std::to_string(id_) + " was registered with tip " + machine.active_tip +
+                                       " but the machine's active tip is " + info.active_tip +
+                                       ": select it again, or resume with reregister"};
     check_control();
     const planner::MeasurementPlan plan = plan_job(model, reg.T_M_S, machine, request_);
     if (!env_.store.read_file(id_, "plan.json"))
@@ -209,10 +245,8 @@ void JobRunner::run(bool rehome, bool reregister) {
     for (const planner::Touch& t : plan.program.touches) {
       if (results.contains(t.id)) continue;
       check_control();
-      touch_in_progress_ = t;
-      const hal::TouchResult r = run_touch(env_.machine.cmm(), t, clearance, {0, machine.probe_speed_mm_s});
+      const hal::TouchResult r = touch(t, clearance, machine.probe_speed_mm_s);
       journal.append({t.id, r});
-      touch_in_progress_.reset();
       results[t.id] = r;
       remaining_s -= planned_s[t.id];
       planned_done_s += planned_s[t.id];
@@ -239,6 +273,8 @@ void JobRunner::run(bool rehome, bool reregister) {
     const std::string summary = write_job_result(env_.store, id_, inputs);
     sink_.state(JobState::done, summary, std::nullopt);
   } catch (const Held& held) {
+    // A cancel ends the job, so its touch is left now; a stop or a shutdown means no more motion:
+    // the recorded search line waits for the next mover.
     if (held.state == JobState::cancelled) finish_touch_safely();
     sink_.state(held.state, held.reason, std::nullopt);
   } catch (const hal::Fault& fault) {

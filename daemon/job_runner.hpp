@@ -52,16 +52,14 @@ class JobRunner {
   // the plate again instead of keeping registration.json.
   void run(bool rehome, bool reregister);
 
-  // The touch that was in progress when the last run ended early, so a resume can leave it safely.
-  const std::optional<planner::Touch>& touch_in_progress() const { return touch_in_progress_; }
-  void set_touch_in_progress(std::optional<planner::Touch> touch) { touch_in_progress_ = std::move(touch); }
-
  private:
   struct Registration;
   void prepare_machine(bool rehome);
   Registration registration(bool reregister, double radius_mm, const std::string& tip);
   Registration measure_plate(double radius_mm);
   void check_control() const;
+  void check_stop() const;  // between the motions of one touch: a stop, a cancel, a shutdown
+  hal::TouchResult touch(const planner::Touch& t, double clearance_z, double probe_speed_mm_s);
   void finish_touch_safely();
 
   RunEnvironment env_;
@@ -69,7 +67,6 @@ class JobRunner {
   JobRequest request_;
   JobControl& control_;
   JobSink sink_;
-  std::optional<planner::Touch> touch_in_progress_;
 };
 
 }  // namespace cmm::daemon

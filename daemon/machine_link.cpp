@@ -1,5 +1,10 @@
 #include "daemon/machine_link.hpp"
 
+#include <fstream>
+
+#include <spdlog/spdlog.h>
+
+#include "daemon/atomic_file.hpp"
 #include "hal/fault.hpp"
 
 namespace cmm::daemon {
@@ -10,8 +15,46 @@ nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 }  // namespace
 
-MachineLink::MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, std::string driver)
-    : cmm_(std::move(cmm)), block_(std::move(block)), driver_(std::move(driver)) {}
+MachineLink::MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, std::string driver,
+                         std::filesystem::path touch_file)
+    : cmm_(std::move(cmm)), block_(std::move(block)), driver_(std::move(driver)), touch_file_(std::move(touch_file)) {
+  if (touch_file_.empty() || !std::filesystem::exists(touch_file_)) return;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(touch_file_));
+    SearchLine line;
+    for (int i = 0; i < 3; ++i) {
+      line.start[i] = j.at("start").at(static_cast<std::size_t>(i)).get<double>();
+      line.direction[i] = j.at("direction").at(static_cast<std::size_t>(i)).get<double>();
+    }
+    touch_ = line;
+    spdlog::warn("the probe may still be on the search line from ({}, {}, {}): the next motion leaves along it",
+                 line.start.x(), line.start.y(), line.start.z());
+  } catch (const std::exception& e) {
+    spdlog::error("{}: unreadable ({}); ignored", touch_file_.string(), e.what());
+  }
+}
+
+void MachineLink::enter_touch(const SearchLine& line) {
+  const std::lock_guard lock(touch_mutex_);
+  touch_ = line;
+  if (!touch_file_.empty())
+    write_atomically(touch_file_, nlohmann::json{{"start", vec(line.start)}, {"direction", vec(line.direction)}}.dump());
+}
+
+void MachineLink::left_touch() {
+  const std::lock_guard lock(touch_mutex_);
+  if (!touch_) return;
+  touch_.reset();
+  if (!touch_file_.empty()) {
+    std::error_code ignored;
+    std::filesystem::remove(touch_file_, ignored);
+  }
+}
+
+std::optional<SearchLine> MachineLink::touch_in_progress() const {
+  const std::lock_guard lock(touch_mutex_);
+  return touch_;
+}
 
 void MachineLink::bring_up() {
   const std::lock_guard lock(bring_up_mutex_);
@@ -50,12 +93,24 @@ nlohmann::json MachineLink::status_json() {
 
 MachineLink::Lease::~Lease() {
   if (link_ == nullptr) return;
-  const std::lock_guard lock(link_->lease_mutex_);
-  link_->holder_.reset();
+  {
+    const std::lock_guard lock(link_->lease_mutex_);
+    link_->holder_.reset();
+  }
+  link_->released_.notify_all();
 }
 
 std::optional<MachineLink::Lease> MachineLink::try_lease(const std::string& holder) {
   const std::lock_guard lock(lease_mutex_);
+  if (holder_) return std::nullopt;
+  holder_ = holder;
+  return std::optional<Lease>(std::in_place, *this);
+}
+
+std::optional<MachineLink::Lease> MachineLink::lease_after_reconnect(const std::string& holder,
+                                                                    std::chrono::milliseconds patience) {
+  std::unique_lock lock(lease_mutex_);
+  released_.wait_for(lock, patience, [this] { return !holder_ || *holder_ != kReconnectHolder; });
   if (holder_) return std::nullopt;
   holder_ = holder;
   return std::optional<Lease>(std::in_place, *this);

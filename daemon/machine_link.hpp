@@ -2,6 +2,9 @@
 // brought back after a link fault, and leased to one user at a time (a job or a manual command).
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -13,9 +16,18 @@
 
 namespace cmm::daemon {
 
+// The search line of a touch the ball may still be on (it entered and has not yet come back to the
+// start): whoever moves next leaves along it instead of rising straight from where the ball stopped.
+struct SearchLine {
+  hal::Vec3 start = hal::Vec3::Zero();
+  hal::Vec3 direction = -hal::Vec3::UnitZ();
+};
+
 class MachineLink {
  public:
-  MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, std::string driver);
+  // `touch_file` keeps the touch in progress across a restart of cmmd (empty: memory only).
+  MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, std::string driver,
+              std::filesystem::path touch_file = {});
 
   // Configures once, then connects and enables as far as needed. Throws hal::Fault (CommLost when
   // the machine cannot be reached) or hal::ConfigError for a bad driver block.
@@ -39,7 +51,18 @@ class MachineLink {
   };
   // Empty when someone else holds the machine; holder() then says who.
   std::optional<Lease> try_lease(const std::string& holder);
+  // As try_lease, but waits up to `patience` while only the monitor's reconnect attempt (holder
+  // kReconnectHolder, a few seconds at most) holds the machine: a command issued just as cmmd
+  // starts, or as a cable comes back, must not fail for that. A job or a command still refuses at once.
+  std::optional<Lease> lease_after_reconnect(const std::string& holder, std::chrono::milliseconds patience);
+  static constexpr const char* kReconnectHolder = "reconnect";
   std::optional<std::string> holder() const;
+
+  // Recorded (durably, with a touch file) before a touch's first motion, cleared once the ball is
+  // back at its start.
+  void enter_touch(const SearchLine& line);
+  void left_touch();
+  std::optional<SearchLine> touch_in_progress() const;
 
  private:
   std::unique_ptr<hal::Cmm> cmm_;
@@ -49,6 +72,10 @@ class MachineLink {
   std::mutex bring_up_mutex_;
   mutable std::mutex lease_mutex_;
   std::optional<std::string> holder_;
+  std::condition_variable released_;
+  std::filesystem::path touch_file_;
+  mutable std::mutex touch_mutex_;
+  std::optional<SearchLine> touch_;
 };
 
 nlohmann::json fault_json(const std::exception& e);  // {"kind", "message"}; kind "Internal" for a non-fault

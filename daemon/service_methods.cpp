@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/plan_preview.hpp"
+#include "daemon/touch_motion.hpp"
 #include "hal/fault.hpp"
 #include "hal/qualification.hpp"
 #include "planner/registration.hpp"
@@ -30,13 +31,19 @@ std::string text(const nlohmann::json& params, const char* key, const std::strin
 // Runs a manual machine command with the machine to itself, faults as −32013 with their kind.
 template <class F>
 nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
-  std::optional<MachineLink::Lease> lease = s.machine.try_lease(what);
+  std::optional<MachineLink::Lease> lease = s.machine.lease_after_reconnect(what, std::chrono::seconds(10));
   if (!lease) {
     const std::string holder = s.machine.holder().value_or("another command");
     throw RpcError(rpc_code::machine_busy, "the machine is busy: " + holder + " holds it", {{"holder", holder}});
   }
   try {
     s.machine.bring_up();
+    // A job stopped mid-touch left the ball on its search line: out the way it came first.
+    if (const auto line = s.machine.touch_in_progress(); line && s.machine.cmm().status().homed) {
+      const planner::MachineDescription& d = s.config.description;
+      leave_touch(s.machine.cmm(), line->start, line->direction, d.clearance_z, {0, d.probe_speed_mm_s});
+      s.machine.left_touch();
+    }
     return f(s.machine.cmm());
   } catch (const hal::Fault& fault) {
     throw RpcError(rpc_code::machine_fault, what + ": " + fault.what(), {{"kind", hal::to_string(fault.kind())}});
@@ -54,8 +61,9 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
           return j;
         }});
   d.add("machine.home", {Role::operator_, true, [&s](const nlohmann::json&, RpcContext&) {
-          return with_machine(s, "machine.home", [](hal::Cmm& cmm) {
+          return with_machine(s, "machine.home", [&s](hal::Cmm& cmm) {
             cmm.home();
+            s.machine.left_touch();  // the operator homed it: wherever the ball was, it is home now
             return nlohmann::json{{"position", vec(cmm.status().position)}};
           });
         }});
@@ -122,8 +130,7 @@ void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
         }});
   d.add("plan.preview", {Role::observer, true, [&s](const nlohmann::json& p, RpcContext&) {
           std::optional<hal::MachineInfo> info;
-          try {
-            s.machine.bring_up();
+          try {  // only read: an observer's preview never connects or enables the machine
             info = s.machine.cmm().info();
           } catch (const std::exception& e) {
             spdlog::info("plan.preview without the machine's tips: {}", e.what());

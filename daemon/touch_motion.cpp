@@ -13,11 +13,19 @@ void rise(hal::Cmm& cmm, double clearance_z, const TouchSpeeds& speeds) {
 
 }  // namespace
 
-hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds) {
+hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds,
+                           const std::function<void()>& before_motion) {
+  const auto check = [&] {
+    if (before_motion) before_motion();
+  };
+  check();
   rise(cmm, clearance_z, speeds);
+  check();
   const hal::Vec3 above(touch.start.x(), touch.start.y(), std::max(clearance_z, cmm.status().position.z()));
   cmm.move({above, speeds.travel_mm_s});
+  check();
   cmm.move({touch.start, speeds.travel_mm_s});
+  check();
   hal::ProbeMove search;
   search.start = touch.start;
   search.direction = touch.direction;
@@ -27,16 +35,18 @@ hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double cl
   search.fail_on_miss = false;  // a miss is a result for this point, not a reason to stop the job
   // Refuse a trigger in the first fifth of the run-up: the part is then far from where the plan put it.
   search.min_travel_mm = std::min(0.2 * touch.max_travel_mm, 0.5);
-  return cmm.probe(search);
+  const hal::TouchResult result = cmm.probe(search);
+  cmm.move({touch.start, speeds.travel_mm_s});
+  return result;
 }
 
-void leave_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds) {
+void leave_touch(hal::Cmm& cmm, const hal::Vec3& start, const hal::Vec3& direction, double clearance_z,
+                 const TouchSpeeds& speeds) {
   const hal::Vec3 at = cmm.status().position;
-  const hal::Vec3 from_start = at - touch.start;
-  const double along = from_start.dot(touch.direction);
+  const hal::Vec3 from_start = at - start;
+  const double along = from_start.dot(direction);
   // Only when the ball is on the search line (stopped mid-search, or after its retract).
-  if ((from_start - along * touch.direction).norm() < 1e-3 && along > 1e-6)
-    cmm.move({touch.start, speeds.probe_mm_s});
+  if ((from_start - along * direction).norm() < 1e-3 && along > 1e-6) cmm.move({start, speeds.probe_mm_s});
   rise(cmm, clearance_z, speeds);
 }
 
