@@ -127,6 +127,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
   MachineMonitor monitor(machine, jobs, *server, notifier);
 
   asio::signal_set signals(io, SIGINT, SIGTERM, SIGHUP);
+  std::thread stopper;
   std::function<void(const asio::error_code&, int)> on_signal = [&](const asio::error_code& ec, int signal) {
     if (ec) return;
     if (signal == SIGHUP) {
@@ -146,17 +147,24 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
       signals.async_wait(on_signal);
       return;
     }
+    if (stopper.joinable()) return;  // a second SIGTERM while the first is being served
     spdlog::info("signal {}: stopping the machine and shutting down", signal);
     notifier.stopping();
-    // The job first, so the stop reads as a shutdown (the job becomes interrupted, not paused);
-    // then the machine, so a manual command a worker is blocked in returns before the server joins it.
-    jobs.shutdown();
-    try {
-      machine.cmm().stop();
-    } catch (const std::exception&) {
-    }
-    server->stop();
-    io.stop();
+    // Off the event loop: a job may need a while to reach its next stop point (planning a large
+    // model), and meanwhile the loop keeps answering clients and kicking the watchdog.
+    stopper = std::thread([&] {
+      // The job first, so the stop reads as a shutdown (the job becomes interrupted, not paused);
+      // then the machine, so a manual command a worker is blocked in returns before the server joins it.
+      jobs.shutdown();
+      try {
+        machine.cmm().stop();
+      } catch (const std::exception&) {
+      }
+      asio::post(io, [&] {
+        server->stop();
+        io.stop();
+      });
+    });
   };
   signals.async_wait(on_signal);
   notifier.start_watchdog(io);
@@ -172,6 +180,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
   notifier.ready("ready; machine driver " + config.driver);
   io.run();
 
+  if (stopper.joinable()) stopper.join();
   notifier.stop_watchdog();
   jobs.shutdown();  // already done by the signal; here for a loop that ended otherwise
   spdlog::info("cmmd stopped");

@@ -58,6 +58,13 @@ planner::MachineDescription machine_for_job(const planner::MachineDescription& c
         described.offset = tip.offset;
       }
   if (!info.active_tip.empty()) machine.active_tip = info.active_tip;
+  // The plan keeps to where both the description and the machine itself say the ball may go: a
+  // controller configured with tighter soft limits than machine.json must not fault mid-job.
+  const hal::TravelBox& reported = info.travel_box;
+  if ((reported.max.array() > reported.min.array()).all()) {
+    machine.travel_box.min = machine.travel_box.min.cwiseMax(reported.min);
+    machine.travel_box.max = machine.travel_box.max.cwiseMin(reported.max);
+  }
   return machine;
 }
 

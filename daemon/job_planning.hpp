@@ -27,7 +27,8 @@ struct ReferenceModel {
 ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request);
 
 // The description the plan is made for: the configured one, with the machine's active tip and its
-// qualified radius (a job uses the active tip's qualified radius, DESIGN.md).
+// qualified radius (a job uses the active tip's qualified radius, DESIGN.md), and the travel box
+// cut down to the machine's own where that is smaller.
 planner::MachineDescription machine_for_job(const planner::MachineDescription& configured, const hal::MachineInfo& info);
 
 // Throws RpcError planning_error when the plan cannot be made.

@@ -246,7 +246,13 @@ void JobRunner::run(bool rehome, bool reregister) {
       if (results.contains(t.id)) continue;
       check_control();
       const hal::TouchResult r = touch(t, clearance, machine.probe_speed_mm_s);
-      journal.append({t.id, r});
+      try {
+        journal.append({t.id, r});
+      } catch (const std::exception& e) {
+        // The touch is made but not kept: hold the job (a full disk is the operator's to clear);
+        // the resume makes this touch again, so the result still holds it exactly once.
+        throw Held{JobState::paused, std::string("the touch journal could not be written: ") + e.what()};
+      }
       results[t.id] = r;
       remaining_s -= planned_s[t.id];
       planned_done_s += planned_s[t.id];

@@ -76,6 +76,31 @@ JobRecord read_record(const fs::path& folder, int id, const std::string& text) {
   return record;
 }
 
+// A job whose job.json is unreadable (a disk error, an operator's edit) comes back from what the
+// folder still holds rather than stopping cmmd from starting: its touches stay, and the operator
+// decides. With result.json beside it the job had finished; otherwise it is resumable.
+JobRecord rebuild_record(const fs::path& folder, int id, const std::string& why) {
+  JobRecord record;
+  record.id = id;
+  record.created = record.updated = hal::utc_now();
+  const bool finished = fs::exists(folder / "result.json");
+  record.state = finished ? JobState::done : JobState::interrupted;
+  record.reason = "job.json was unreadable (" + why + "); rebuilt from the job folder";
+  record.progress.phase = to_string(record.state);
+  try {
+    if (const auto text = read_whole(folder / request_file)) record.request = parse_file(folder / request_file, *text);
+  } catch (const std::exception& e) {
+    spdlog::error("job store: job {}: {}", id, e.what());  // the job manager fails the job for it
+  }
+  if (record.request.is_object()) {
+    if (record.request.contains("name") && record.request["name"].is_string())
+      record.name = record.request["name"].get<std::string>();
+    if (record.request.contains("model") && record.request["model"].is_string())
+      record.model = record.request["model"].get<std::string>();
+  }
+  return record;
+}
+
 // A file directly in the job folder; the store's own two files are written by the store only.
 void check_file_name(const std::string& name, bool writing) {
   const bool reserved = writing && (name == record_file || name == request_file);
@@ -108,7 +133,14 @@ std::vector<JobRecord> JobStore::recover() {
       spdlog::warn("job store: {} has no {} (cmmd stopped while creating the job); skipped", dir.string(), record_file);
       continue;
     }
-    JobRecord record = read_record(dir, id, *text);
+    JobRecord record;
+    try {
+      record = read_record(dir, id, *text);
+    } catch (const std::exception& e) {
+      spdlog::error("job store: {}", e.what());
+      record = rebuild_record(dir, id, e.what());
+      write_atomically(dir / record_file, nlohmann::json(record).dump(2));
+    }
     if (is_running(record.state)) {
       record.reason = std::string("cmmd restarted during ") + to_string(record.state);
       record.state = JobState::interrupted;

@@ -100,7 +100,13 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
       else if (f.kind() == hal::FaultKind::soft_limit) out_of_travel++;
       else other++;
       if (problems.size() < 100) problems.push_back({{"touch", t.id}, {"kind", hal::to_string(f.kind())}, {"message", f.what()}});
-      recover(cmm);
+      try {
+        recover(cmm);
+      } catch (const hal::Fault& stuck) {
+        // The simulated ball cannot get free (it stopped inside the mesh): the rest would not say more.
+        problems.push_back({{"touch", t.id}, {"kind", "dry_run_stopped"}, {"message", stuck.what()}});
+        break;
+      }
     }
   }
   std::size_t probeable = 0;

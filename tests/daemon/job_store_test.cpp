@@ -130,28 +130,33 @@ TEST(JobStore, AFolderLeftHalfCreatedIsSkippedAndItsIdNotReused) {
   EXPECT_EQ(store.create(request(3), "three", "file:block.ply").id, 3);
 }
 
-TEST(JobStore, ADamagedJobFileIsAnErrorNamingIt) {
+// A damaged job.json must not keep cmmd from starting (a restart loop under systemd): the job comes
+// back from its folder, resumable, its reason naming the file and what was wrong.
+TEST(JobStore, ADamagedJobFileIsRebuiltFromTheFolderNamingTheDamage) {
   const fs::path dir = fresh_folder("jobs-damaged");
   {
     JobStore store(dir);
     store.create(request(1), "one", "file:block.ply");
     store.create(request(2), "two", "file:block.ply");
+    store.create(request(3), "three", "file:block.ply");
   }
   std::ofstream(dir / "000002" / "job.json") << R"({"id": 2, "name": "two", "state": )";
-  try {
-    JobStore(dir).recover();
-    FAIL() << "a damaged job.json was accepted";
-  } catch (const geometry::FileError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("000002/job.json"));
-  }
-  std::ofstream(dir / "000002" / "job.json") << R"({"id": 2, "name": "two", "state": "running"})";
-  try {
-    JobStore(dir).recover();
-    FAIL() << "a job.json with an unknown state was accepted";
-  } catch (const geometry::FileError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("000002/job.json"));
-    EXPECT_THAT(e.what(), HasSubstr("running"));
-  }
+  std::ofstream(dir / "000003" / "job.json") << R"({"id": 3, "name": "three", "state": "running"})";
+  std::ofstream(dir / "000003" / "result.json") << "{}";
+  const std::vector<JobRecord> jobs = JobStore(dir).recover();
+  ASSERT_EQ(jobs.size(), 3u);
+  EXPECT_EQ(jobs[0].state, JobState::queued);
+  EXPECT_EQ(jobs[1].id, 2);
+  EXPECT_EQ(jobs[1].state, JobState::interrupted);
+  EXPECT_THAT(jobs[1].reason, HasSubstr("000002/job.json"));
+  EXPECT_EQ(jobs[1].request, request(2));
+  EXPECT_EQ(jobs[1].name, request(2).value("name", ""));
+  EXPECT_EQ(jobs[2].state, JobState::done);  // its result was written before the record broke
+  EXPECT_THAT(jobs[2].reason, HasSubstr("running"));
+  // The rebuilt record is written back, so the next start reads it as it is.
+  const std::vector<JobRecord> again = JobStore(dir).recover();
+  EXPECT_EQ(again[1].state, JobState::interrupted);
+  EXPECT_EQ(again[1].reason, jobs[1].reason);
 }
 
 TEST(JobStore, AProcessKilledWhileCreatingAndSavingLeavesARecoverableStore) {
