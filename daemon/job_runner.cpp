@@ -176,15 +176,20 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
   return reg;
 }
 
-void JobRunner::finish_touch_safely() {
+void JobRunner::finish_touch_safely(bool clear_of_part) {
   const std::optional<SearchLine> line = env_.machine.touch_in_progress();
-  if (!line) return;
+  if (!line && !clear_of_part) return;
   try {
     // A stop dropped the driver to connected; enable it again to move out the way the ball came.
     env_.machine.bring_up();
     const hal::MachineStatus s = env_.machine.cmm().status();
     if (!s.homed || s.aborted || s.estop) return;  // it cannot move now; the next mover leaves the line
     const planner::MachineDescription& d = env_.config.description;
+    if (!line) {
+      // Between touches the ball rests at the last one's search start, below the plane.
+      rise_to_clearance(env_.machine.cmm(), d.clearance_z, {0, d.probe_speed_mm_s});
+      return;
+    }
     leave_touch(env_.machine.cmm(), line->start, line->direction, d.clearance_z, {0, d.probe_speed_mm_s});
     env_.machine.left_touch();
   } catch (const std::exception& e) {
@@ -281,12 +286,12 @@ void JobRunner::run(bool rehome, bool reregister) {
   } catch (const Held& held) {
     // A cancel ends the job, so its touch is left now; a stop or a shutdown means no more motion:
     // the recorded search line waits for the next mover.
-    if (held.state == JobState::cancelled) finish_touch_safely();
+    if (held.state == JobState::cancelled) finish_touch_safely(true);
     sink_.state(held.state, held.reason, std::nullopt);
   } catch (const hal::Fault& fault) {
     // A stop the operator or cmmd asked for surfaces as the driver's Aborted; say why it came.
     if (control_.cancel) {
-      finish_touch_safely();
+      finish_touch_safely(true);
       sink_.state(JobState::cancelled, "cancelled by the operator", std::nullopt);
     } else if (control_.shutdown) {
       sink_.state(JobState::interrupted, "cmmd stopped during the job", std::nullopt);

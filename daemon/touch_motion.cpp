@@ -4,14 +4,10 @@
 
 namespace cmm::daemon {
 
-namespace {
-
-void rise(hal::Cmm& cmm, double clearance_z, const TouchSpeeds& speeds) {
+void rise_to_clearance(hal::Cmm& cmm, double clearance_z, const TouchSpeeds& speeds) {
   const hal::Vec3 at = cmm.status().position;
   if (at.z() < clearance_z) cmm.move({hal::Vec3(at.x(), at.y(), clearance_z), speeds.travel_mm_s});
 }
-
-}  // namespace
 
 hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds,
                            const std::function<void()>& before_motion) {
@@ -19,7 +15,7 @@ hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double cl
     if (before_motion) before_motion();
   };
   check();
-  rise(cmm, clearance_z, speeds);
+  rise_to_clearance(cmm, clearance_z, speeds);
   check();
   const hal::Vec3 above(touch.start.x(), touch.start.y(), std::max(clearance_z, cmm.status().position.z()));
   cmm.move({above, speeds.travel_mm_s});
@@ -47,7 +43,7 @@ void leave_touch(hal::Cmm& cmm, const hal::Vec3& start, const hal::Vec3& directi
   const double along = from_start.dot(direction);
   // Only when the ball is on the search line (stopped mid-search, or after its retract).
   if ((from_start - along * direction).norm() < 1e-3 && along > 1e-6) cmm.move({start, speeds.probe_mm_s});
-  rise(cmm, clearance_z, speeds);
+  rise_to_clearance(cmm, clearance_z, speeds);
 }
 
 }  // namespace cmm::daemon

@@ -24,6 +24,10 @@ struct TouchSpeeds {
 hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds,
                            const std::function<void()>& before_motion = {});
 
+// Straight up to clearance_z from where the ball is (a ball above the plane stays): the rise every
+// touch starts with, safe from where the last touch left the ball (its search start).
+void rise_to_clearance(hal::Cmm& cmm, double clearance_z, const TouchSpeeds& speeds);
+
 // After a stop in the middle of a touch: back along the search line to its start, then up to the
 // clearance plane, so the ball leaves the way it came in (a straight rise from beside a wall or
 // inside a bore could hit what the plan's approach avoided).
