@@ -1,12 +1,17 @@
 #include "cmmd_instance.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <fstream>
 #include <stdexcept>
 
 #include "daemon/model_upload.hpp"
+#include "daemon/touch_journal.hpp"
 #include "tests/tools/run_command.hpp"
 
 namespace cmm::testing {
@@ -17,12 +22,6 @@ void write_json(const std::filesystem::path& file, const nlohmann::json& j) {
   std::ofstream out(file);
   out << j.dump(1) << "\n";
   if (!out.flush()) throw std::runtime_error("cannot write " + file.string());
-}
-
-nlohmann::json read_json(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error("cannot read " + file.string());
-  return nlohmann::json::parse(in);
 }
 
 }  // namespace
@@ -44,7 +43,10 @@ CmmdInstance::~CmmdInstance() = default;
 void CmmdInstance::start() {
   process_ = std::make_unique<ChildProcess>(
       std::vector<std::string>{CMMD_BINARY_DIR "/daemon/cmmd", "--config", (folder_ / "cmmd.json").string()});
-  const nlohmann::json ready = nlohmann::json::parse(process_->read_line(60));
+  // spdlog writes to stdout too: a restart's warnings (an interrupted job) come before the ready line.
+  std::string line = process_->read_line(60);
+  while (line.empty() || line.front() != '{') line = process_->read_line(60);
+  const nlohmann::json ready = nlohmann::json::parse(line);
   if (!ready.value("ready", false)) throw std::runtime_error("cmmd: " + ready.dump());
   tcp_port_ = ready["tcp"].is_number() ? ready["tcp"].get<int>() : 0;
 }
@@ -123,7 +125,54 @@ std::filesystem::path sample_scan(const std::filesystem::path& folder) {
 
 nlohmann::json sample_measure_plate(const std::filesystem::path& folder) {
   sample_scan(folder);
-  return {{"measure_plate", read_json(folder / "plate_corners.json")}};
+  return {{"measure_plate", read_json_file(folder / "plate_corners.json")}};
+}
+
+SimulatorProcess::SimulatorProcess(const std::filesystem::path& config, double time_scale, int port)
+    : process({CMMD_BINARY_DIR "/sim/cmm-sim", "--config", config.string(), "--port", std::to_string(port),
+               "--time-scale", std::to_string(time_scale)}) {
+  this->port = nlohmann::json::parse(process.read_line(60)).at("modbus_tcp").get<int>();
+}
+
+nlohmann::json modbus_block(int port) {
+  return {{"driver", "modbus"}, {"host", "127.0.0.1"}, {"port", port}, {"connect_attempts", 3}};
+}
+
+int free_tcp_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) throw std::runtime_error("free_tcp_port: socket() failed");
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof address;
+  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0 &&
+                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) == 0;
+  ::close(fd);
+  if (!ok) throw std::runtime_error("free_tcp_port: cannot bind a loopback port");
+  return ntohs(address.sin_port);
+}
+
+nlohmann::json wait_for_notification(daemon::RpcClient& client, const std::string& what,
+                                     const std::function<bool(const nlohmann::json&)>& match, double timeout_s) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    const double left = std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
+    if (left <= 0) throw std::runtime_error("no notification " + what + " within " + std::to_string(timeout_s) + " s");
+    if (const std::optional<nlohmann::json> n = client.wait_notification(left); n && match(*n)) return *n;
+  }
+}
+
+std::vector<int> journal_touch_ids(const std::filesystem::path& job_folder) {
+  std::vector<int> ids;
+  for (const daemon::JournalEntry& e : daemon::recover_journal(job_folder / "touches.jsonl").entries)
+    ids.push_back(e.touch_id);
+  return ids;
+}
+
+nlohmann::json read_json_file(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("cannot read " + file.string());
+  return nlohmann::json::parse(in);
 }
 
 }  // namespace cmm::testing

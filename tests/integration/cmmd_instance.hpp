@@ -3,9 +3,11 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -53,5 +55,26 @@ nlohmann::json sample_sim_block();
 nlohmann::json sample_measure_plate(const std::filesystem::path& folder);
 // A scanned reference mesh of the sample part (cmm-scan), written once into `folder`.
 std::filesystem::path sample_scan(const std::filesystem::path& folder);
+
+// cmm-sim on loopback serving `config` over Modbus TCP; `port` 0 lets it pick one (see port).
+struct SimulatorProcess {
+  SimulatorProcess(const std::filesystem::path& config, double time_scale, int port = 0);
+  ChildProcess process;
+  int port = 0;
+};
+// cmmd.json's machine block for a cmm-sim on 127.0.0.1:port.
+nlohmann::json modbus_block(int port);
+// A loopback TCP port that was free a moment ago: for a child that must listen on a port known
+// before it starts (cmm-sim started again on the port cmmd keeps reconnecting to).
+int free_tcp_port();
+
+// The next notification (as {"method", "params"}) that `match` accepts, the others dropped; throws
+// std::runtime_error naming `what` after timeout_s.
+nlohmann::json wait_for_notification(daemon::RpcClient& client, const std::string& what,
+                                     const std::function<bool(const nlohmann::json&)>& match, double timeout_s);
+// The touch ids of a job's touches.jsonl in file order (a torn last line left out).
+std::vector<int> journal_touch_ids(const std::filesystem::path& job_folder);
+// A JSON file's contents; std::runtime_error naming the file when it cannot be read.
+nlohmann::json read_json_file(const std::filesystem::path& file);
 
 }  // namespace cmm::testing

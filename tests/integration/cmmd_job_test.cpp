@@ -20,6 +20,8 @@ namespace {
 
 using nlohmann::json;
 using testing::CmmdInstance;
+using testing::modbus_block;
+using testing::SimulatorProcess;
 
 std::filesystem::path scratch(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / ("cmmd_job_test_" + name + "_" + std::to_string(getpid()));
@@ -28,21 +30,6 @@ std::filesystem::path scratch(const std::string& name) {
 }
 
 geometry::Vec3 vec(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
-
-// cmm-sim on loopback with the sample part; its Modbus port.
-struct SimulatorProcess {
-  explicit SimulatorProcess(const std::filesystem::path& config, double time_scale, int port = 0)
-      : process({CMMD_BINARY_DIR "/sim/cmm-sim", "--config", config.string(), "--port", std::to_string(port),
-                 "--time-scale", std::to_string(time_scale)}) {
-    this->port = json::parse(process.read_line(60)).at("modbus_tcp").get<int>();
-  }
-  testing::ChildProcess process;
-  int port = 0;
-};
-
-json modbus_block(int port) {
-  return {{"driver", "modbus"}, {"host", "127.0.0.1"}, {"port", port}, {"connect_attempts", 3}};
-}
 
 TEST(CmmdJob, MeasuresThePlateAndEveryEdgeOverModbusWithinTenMicrometresOfTheTruth) {
   const auto dir = scratch("full");
