@@ -141,7 +141,10 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
         spdlog::info("SIGHUP: reloaded {} (log level {}, {} token(s))", config_file.string(), next.log_level,
                      next.server.tokens.size());
       } catch (const hal::ConfigError& e) {
-        spdlog::error("SIGHUP: {} refused, running on: {}", config_file.string(), e.what());
+        // One line: the journal keeps each line as its own entry, and the reasons belong with the error.
+        std::string problems;
+        for (const std::string& problem : e.problems()) problems += (problems.empty() ? "" : "; ") + problem;
+        spdlog::error("SIGHUP: {} refused, running on: {}", config_file.string(), problems);
       }
       notifier.ready("ready");
       signals.async_wait(on_signal);

@@ -4,6 +4,8 @@
 #include <fstream>
 #include <set>
 
+#include <asio/ip/address.hpp>
+
 #include "hal/config_block.hpp"
 #include "sim/sim_config.hpp"
 
@@ -70,6 +72,13 @@ void read_server(hal::ConfigBlock& b, DaemonConfig& c) {
     token.finish();
     s.tokens.push_back(t);
   }
+  // Refused here as well as in RpcServer::start, so `cmmd --check` says it before systemd starts
+  // cmmd; a host name only resolves at start and is checked there.
+  asio::error_code not_an_address;
+  const asio::ip::address address = asio::ip::make_address(s.tcp_bind, not_an_address);
+  if (s.tcp_enabled && s.tokens.empty() && !not_an_address && !address.is_loopback())
+    b.problem("tcp_bind", "\"" + s.tcp_bind + "\" is not a loopback address and no server.tokens are set (anyone " +
+                              "who reaches the port could move the machine); set tokens or bind 127.0.0.1");
   b.finish();
 }
 

@@ -10,7 +10,7 @@ namespace cmm::daemon {
 namespace {
 
 [[noreturn]] void bad(const std::string& path, const std::string& message) {
-  throw RpcError(rpc_code::invalid_params, path + ": " + message, {{"path", path}});
+  throw RpcError(rpc_code::invalid_params, (path.empty() ? "params" : path) + ": " + message, {{"path", path}});
 }
 
 double number(const nlohmann::json& j, const char* key, double fallback, double min, double max) {

@@ -13,7 +13,7 @@ namespace cmm::daemon {
 namespace {
 
 [[noreturn]] void bad_param(const std::string& path, const std::string& message) {
-  throw RpcError(rpc_code::invalid_params, path + ": " + message, {{"path", path}});
+  throw RpcError(rpc_code::invalid_params, (path.empty() ? "params" : path) + ": " + message, {{"path", path}});
 }
 
 int job_id(const nlohmann::json& params) {
@@ -116,7 +116,7 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
 
 void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
   d.add("model.upload", {Role::operator_, true, [&s](const nlohmann::json& p, RpcContext&) {
-          if (!p.is_object()) bad_param("", "params must be an object");
+          if (!p.is_object()) bad_param("", "must be an object");
           UploadChunk chunk;
           chunk.name = text(p, "name", "");
           chunk.sha256_hex = text(p, "sha256", "");

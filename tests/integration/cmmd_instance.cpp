@@ -40,9 +40,10 @@ CmmdInstance::CmmdInstance(std::filesystem::path folder, nlohmann::json machine,
 
 CmmdInstance::~CmmdInstance() = default;
 
-void CmmdInstance::start() {
-  process_ = std::make_unique<ChildProcess>(
-      std::vector<std::string>{CMMD_BINARY_DIR "/daemon/cmmd", "--config", (folder_ / "cmmd.json").string()});
+void CmmdInstance::start(const std::vector<std::string>& launcher) {
+  std::vector<std::string> argv = launcher;
+  argv.insert(argv.end(), {CMMD_BINARY_DIR "/daemon/cmmd", "--config", (folder_ / "cmmd.json").string()});
+  process_ = std::make_unique<ChildProcess>(argv);
   // spdlog writes to stdout too: a restart's warnings (an interrupted job) come before the ready line.
   std::string line = process_->read_line(60);
   while (line.empty() || line.front() != '{') line = process_->read_line(60);

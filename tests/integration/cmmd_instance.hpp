@@ -22,7 +22,9 @@ class CmmdInstance {
   CmmdInstance(std::filesystem::path folder, nlohmann::json machine, nlohmann::json extra = nlohmann::json::object());
   ~CmmdInstance();
 
-  void start();             // spawns cmmd and waits for its ready line
+  // Spawns cmmd and waits for its ready line. `launcher` goes before cmmd's own command line (e.g.
+  // a shell that sets the environment and execs it, so cmmd keeps the pid the test knows).
+  void start(const std::vector<std::string>& launcher = {});
   void kill9();             // SIGKILL, reaped
   int terminate();          // SIGTERM; its exit status
   bool running() const { return process_ != nullptr; }
