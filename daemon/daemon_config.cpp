@@ -13,12 +13,6 @@ namespace cmm::daemon {
 
 namespace {
 
-std::filesystem::path resolved(const std::string& text, const std::filesystem::path& base_dir) {
-  if (text.empty()) return {};
-  const std::filesystem::path p(text);
-  return p.is_absolute() ? p : base_dir / p;
-}
-
 // systemd hands the directories it made through the environment; they win over the file.
 std::filesystem::path from_environment(const char* variable, const std::filesystem::path& fallback) {
   const char* value = std::getenv(variable);
@@ -28,28 +22,13 @@ std::filesystem::path from_environment(const char* variable, const std::filesyst
   return first;
 }
 
-template <class T, class FromJson, class FromFile>
-T described(hal::ConfigBlock& block, const std::string& key, T fallback, const std::filesystem::path& base_dir,
-            FromJson from_json, FromFile from_file) {
-  const nlohmann::json* j = block.raw(key);
-  if (j == nullptr || (j->is_string() && j->get<std::string>().empty())) return fallback;
-  try {
-    if (j->is_string()) return from_file(resolved(j->get<std::string>(), base_dir));
-    if (j->is_object()) return from_json(*j, block.pointer() + "/" + key);
-    block.problem(key, "must be a file name or an object");
-  } catch (const std::exception& e) {
-    block.problem(key, e.what());
-  }
-  return fallback;
-}
-
 void read_server(hal::ConfigBlock& b, DaemonConfig& c) {
   ServerOptions& s = c.server;
   s.tcp_bind = b.text("tcp_bind", s.tcp_bind);
   s.tcp_port = b.integer("tcp_port", s.tcp_port, 0, 65535);
   s.tcp_enabled = b.flag("tcp_enabled", s.tcp_enabled);
   const std::string socket = b.text("unix_socket", "cmmd.sock");
-  s.unix_path = socket.empty() ? std::string() : resolved(socket, c.runtime_dir).string();
+  s.unix_path = socket.empty() ? std::string() : hal::resolve_config_path(socket, c.runtime_dir).string();
   const std::string mode = b.text("unix_mode", "0660");
   try {
     std::size_t used = 0;
@@ -90,9 +69,11 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string&
   c.source = source;
   hal::ConfigBlock block(j);
   hal::ConfigBlock server = block.object("server");
-  c.state_dir = from_environment("STATE_DIRECTORY", resolved(block.text("state_dir", "/var/lib/cmmd"), base_dir));
-  c.runtime_dir = from_environment("RUNTIME_DIRECTORY", resolved(block.text("runtime_dir", "/run/cmmd"), base_dir));
-  c.models_dir = resolved(block.text("models_dir", ""), base_dir);
+  c.state_dir =
+      from_environment("STATE_DIRECTORY", hal::resolve_config_path(block.text("state_dir", "/var/lib/cmmd"), base_dir));
+  c.runtime_dir =
+      from_environment("RUNTIME_DIRECTORY", hal::resolve_config_path(block.text("runtime_dir", "/run/cmmd"), base_dir));
+  c.models_dir = hal::resolve_config_path(block.text("models_dir", ""), base_dir);
   read_server(server, c);
   {
     hal::ConfigBlock log = block.object("log");
@@ -122,9 +103,9 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string&
       for (const std::string& p : e.problems()) block.problem("machine", p);
     }
   }
-  c.description = described(block, "machine_description", fallback, base_dir, planner::machine_from_json,
+  c.description = hal::described(block, "machine_description", fallback, base_dir, planner::machine_from_json,
                             [](const std::filesystem::path& f) { return planner::read_machine(f); });
-  c.plate = described(block, "plate", sim::default_plate(), base_dir, planner::plate_from_json,
+  c.plate = hal::described(block, "plate", sim::default_plate(), base_dir, planner::plate_from_json,
                       [](const std::filesystem::path& f) { return planner::read_plate(f); });
   {
     hal::ConfigBlock job = block.object("job");

@@ -149,4 +149,10 @@ void ConfigBlock::throw_if_problems(const std::string& source) const {
   if (!problems_->empty()) throw ConfigError(source, *problems_);
 }
 
+std::filesystem::path resolve_config_path(const std::string& name, const std::filesystem::path& base_dir) {
+  if (name.empty()) return {};
+  const std::filesystem::path p(name);
+  return p.is_absolute() ? p : base_dir / p;
+}
+
 }  // namespace cmm::hal

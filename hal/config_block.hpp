@@ -3,6 +3,7 @@
 // config in one edit, not one error per restart.
 #pragma once
 
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <set>
@@ -58,5 +59,25 @@ class ConfigBlock {
   std::shared_ptr<std::vector<std::string>> problems_;
   std::set<std::string> read_;
 };
+
+// A file named in a config: absolute, or relative to the config file's folder; "" stays "".
+std::filesystem::path resolve_config_path(const std::string& name, const std::filesystem::path& base_dir);
+
+// An object a config gives inline or as a file name (a machine description, a plate): absent or ""
+// gives the fallback; a reading error becomes one problem at the key, and reading goes on.
+template <class T, class FromJson, class FromFile>
+T described(ConfigBlock& block, const std::string& key, T fallback, const std::filesystem::path& base_dir,
+            FromJson from_json, FromFile from_file) {
+  const nlohmann::json* j = block.raw(key);
+  if (j == nullptr || (j->is_string() && j->get<std::string>().empty())) return fallback;
+  try {
+    if (j->is_string()) return from_file(resolve_config_path(j->get<std::string>(), base_dir));
+    if (j->is_object()) return from_json(*j, block.pointer() + "/" + key);
+    block.problem(key, "must be a file name or an object");
+  } catch (const std::exception& e) {
+    block.problem(key, e.what());
+  }
+  return fallback;
+}
 
 }  // namespace cmm::hal

@@ -29,37 +29,13 @@ Eigen::Isometry3d read_pose(hal::ConfigBlock block, const Eigen::Isometry3d& fal
   return T;
 }
 
-namespace {
-std::filesystem::path resolve(const std::string& name, const std::string& base_dir) {
-  std::filesystem::path p(name);
-  return p.is_absolute() ? p : std::filesystem::path(base_dir) / p;
-}
-
-// A described object given inline or as a file name; `read` throws the planner's FileError, which
-// becomes one problem at the key.
-template <class T, class FromJson, class FromFile>
-T described(hal::ConfigBlock& block, const std::string& key, T fallback, const std::string& base_dir,
-            FromJson from_json, FromFile from_file) {
-  const nlohmann::json* j = block.raw(key);
-  if (!j) return fallback;
-  try {
-    if (j->is_string()) return from_file(resolve(j->get<std::string>(), base_dir));
-    if (j->is_object()) return from_json(*j, block.pointer() + "/" + key);
-    block.problem(key, "must be a file name or an object");
-  } catch (const std::exception& e) {
-    block.problem(key, e.what());
-  }
-  return fallback;
-}
-}  // namespace
-
 SimConfig sim_config_from_json(const nlohmann::json& j, const std::string& base_dir) {
   hal::ConfigBlock block(j);
   SimConfig c;
   block.text("driver", "sim", {"sim"});
-  c.machine = described(block, "machine", planner::default_machine(), base_dir, planner::machine_from_json,
+  c.machine = hal::described(block, "machine", planner::default_machine(), base_dir, planner::machine_from_json,
                         planner::read_machine);
-  c.plate = described(block, "plate", default_plate(), base_dir, planner::plate_from_json, planner::read_plate);
+  c.plate = hal::described(block, "plate", default_plate(), base_dir, planner::plate_from_json, planner::read_plate);
 
   // By default the plate stands near the middle of the default travel box and the part near the
   // plate's middle, both square to the axes.
@@ -76,7 +52,7 @@ SimConfig sim_config_from_json(const nlohmann::json& j, const std::string& base_
     c.part.analytic = part.text("analytic", c.part.analytic, std::set<std::string>(names.begin(), names.end()));
     c.part.edge_length_mm = part.number("edge_length_mm", c.part.edge_length_mm, 0.05, 50);
     c.part.mesh_file = part.text("mesh", "");
-    if (!c.part.mesh_file.empty()) c.part.mesh_file = resolve(c.part.mesh_file, base_dir).string();
+    if (!c.part.mesh_file.empty()) c.part.mesh_file = hal::resolve_config_path(c.part.mesh_file, base_dir).string();
     c.part.scale = part.number("scale", 1, 1e-6, 1e6);
     part.finish();
   }
