@@ -10,6 +10,7 @@
 #include <mutex>
 #include <thread>
 
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include "daemon/daemon_config.hpp"
@@ -32,8 +33,10 @@ namespace {
 using namespace cmm;
 using namespace cmm::daemon;
 
-// Under systemd the journal adds time and unit; a terminal wants the time.
+// The log goes to stderr: stdout carries the ready line a launcher reads. Under systemd the
+// journal adds time and unit; a terminal wants the time.
 void set_up_logging(const std::string& level) {
+  spdlog::set_default_logger(spdlog::stderr_color_mt("cmmd"));
   if (std::getenv("JOURNAL_STREAM") != nullptr) spdlog::set_pattern("%l: %v");
   else spdlog::set_pattern("[%Y-%m-%d %H:%M:%S.%e] [%l] %v");
   spdlog::set_level(spdlog::level::from_str(level));

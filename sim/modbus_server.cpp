@@ -234,9 +234,11 @@ void ModbusServer::handle(int fd, const std::uint8_t* query, int length) {
 
 void ModbusServer::refresh() {
   std::uint16_t* r = map_->tab_registers;
+  // One snapshot: the machine is read under the lock that also guards done_seq, so a client that
+  // sees a command done never sees the machine still moving from it.
+  std::lock_guard lock(mutex_);
   const hal::MachineStatus s = machine_.status();
   const hal::MachineInfo info = machine_.info();
-  std::lock_guard lock(mutex_);
   r[mb::address("protocol_version")] = mb::kProtocolVersion;
   r[mb::address("flags")] = static_cast<std::uint16_t>((s.homed ? mb::homed : 0) | (s.moving ? mb::moving : 0) |
                                                        (s.estop ? mb::estop : 0) | (s.aborted ? mb::aborted : 0) |

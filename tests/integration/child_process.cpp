@@ -15,7 +15,7 @@
 
 namespace cmm::testing {
 
-ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
+ChildProcess::ChildProcess(const std::vector<std::string>& argv, bool with_stderr) {
   int pipe_fds[2];
   if (pipe2(pipe_fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe: " + std::string(std::strerror(errno)));
   std::vector<char*> args;
@@ -27,6 +27,7 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
     // Dies with the test, so a crashed or killed test never leaves a server behind holding ctest's pipes.
     prctl(PR_SET_PDEATHSIG, SIGKILL);
     dup2(pipe_fds[1], STDOUT_FILENO);
+    if (with_stderr) dup2(pipe_fds[1], STDERR_FILENO);
     execv(args[0], args.data());
     _exit(127);
   }

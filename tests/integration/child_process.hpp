@@ -11,7 +11,9 @@ namespace cmm::testing {
 
 class ChildProcess {
  public:
-  explicit ChildProcess(const std::vector<std::string>& argv);
+  // with_stderr: its stderr (a daemon's log) comes down the same pipe, for a test that reads the
+  // log; otherwise stderr stays the test's own, and shows in ctest's output when the test fails.
+  explicit ChildProcess(const std::vector<std::string>& argv, bool with_stderr = false);
   ~ChildProcess();
   ChildProcess(const ChildProcess&) = delete;
   ChildProcess& operator=(const ChildProcess&) = delete;

@@ -40,11 +40,11 @@ CmmdInstance::CmmdInstance(std::filesystem::path folder, nlohmann::json machine,
 
 CmmdInstance::~CmmdInstance() = default;
 
-void CmmdInstance::start(const std::vector<std::string>& launcher) {
+void CmmdInstance::start(const std::vector<std::string>& launcher, bool read_log) {
   std::vector<std::string> argv = launcher;
   argv.insert(argv.end(), {CMMD_BINARY_DIR "/daemon/cmmd", "--config", (folder_ / "cmmd.json").string()});
-  process_ = std::make_unique<ChildProcess>(argv);
-  // spdlog writes to stdout too: a restart's warnings (an interrupted job) come before the ready line.
+  process_ = std::make_unique<ChildProcess>(argv, read_log);
+  // With the log on the pipe, a restart's warnings (an interrupted job) come before the ready line.
   std::string line = process_->read_line(60);
   while (line.empty() || line.front() != '{') line = process_->read_line(60);
   const nlohmann::json ready = nlohmann::json::parse(line);

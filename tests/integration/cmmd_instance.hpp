@@ -24,7 +24,8 @@ class CmmdInstance {
 
   // Spawns cmmd and waits for its ready line. `launcher` goes before cmmd's own command line (e.g.
   // a shell that sets the environment and execs it, so cmmd keeps the pid the test knows).
-  void start(const std::vector<std::string>& launcher = {});
+  // read_log: cmmd's log (stderr) comes through process().read_line after the ready line.
+  void start(const std::vector<std::string>& launcher = {}, bool read_log = false);
   void kill9();             // SIGKILL, reaped
   int terminate();          // SIGTERM; its exit status
   bool running() const { return process_ != nullptr; }

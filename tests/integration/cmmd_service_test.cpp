@@ -92,7 +92,7 @@ int submit_quick_job(RpcClient& client, const std::filesystem::path& scan_folder
                              {{"spacing_mm", 8}, {"registration", testing::sample_measure_plate(scan_folder)}});
 }
 
-// The next line of cmmd's log (its stdout) that contains `text`; lines before it are skipped.
+// The next line of cmmd's log (stderr, read with the ready line) that contains `text`; lines before it are skipped.
 std::string log_line_containing(testing::ChildProcess& cmmd, const std::string& text, double timeout_s) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   for (;;) {
@@ -450,7 +450,7 @@ TEST(CmmdLifecycle, SighupAppliesNewTokensAndLogLevelAndABrokenFileKeepsCmmdRunn
   CmmdInstance cmmd(dir, {{"driver", "sim"}}, {{"server", {{"tokens", tokens(kObserverToken, old_operator)}}}});
   // systemd's notify socket tells when a reload is through: READY=1 after RELOADING=1.
   testing::NotifyListener manager(dir / "notify.sock");
-  cmmd.start(testing::notify_launcher(manager, 0));
+  cmmd.start(testing::notify_launcher(manager, 0), true);
   manager.wait_for("READY=1", 60);
   const auto reload = [&] {
     cmmd.process().signal(SIGHUP);
