@@ -288,7 +288,9 @@ json await_mid_touch(Cmmd& d, int job) {
 }
 
 // SIGKILL while the ball moves inside a touch: touch_in_progress.json is still there after the kill.
-// A kill that came just after the touch ended is resumed from, and the next touch tried.
+// A kill that came just after the touch ended is resumed from, and the next touch tried once the
+// job probes again: before that the resumed run homes and leaves the old touch while planning, and a
+// kill there is a kill during planning.
 void kill_mid_touch(Cmmd& d, int job) {
   const double clearance_z = clearance_of(d.job_folder(job));
   for (int attempt = 1;; ++attempt) {
@@ -300,6 +302,7 @@ void kill_mid_touch(Cmmd& d, int job) {
     }
     if (attempt == 5) throw std::runtime_error("5 kills all came between touches");
     d.restart_and_resume(job, "probing");
+    await_job(d.watch(), job, "probing after the resume", state_is(job, "probing"));
   }
 }
 
@@ -516,6 +519,7 @@ TEST(CmmdJobControl, PauseMidTouchHoldsAfterItAStopMidTouchPausesAndResumeMakesE
     if (d.touch_in_progress()) break;  // the stop cut a touch short, as meant
     ASSERT_LT(attempt, 5) << "5 stops all came between touches";
     d.client().call("job.resume", {{"job", id}});
+    await_job(d.watch(), id, "probing after the resume", state_is(id, "probing"));  // not the planning's moves
   }
   journal = testing::journal_touch_ids(folder);
   expect_program_prefix(journal, job.program, "after the stop");
