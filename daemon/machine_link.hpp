@@ -2,7 +2,9 @@
 // brought back after a link fault, and leased to one user at a time (a job or a manual command).
 #pragma once
 
+#include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <condition_variable>
 #include <filesystem>
 #include <memory>
@@ -64,6 +66,11 @@ class MachineLink {
   void left_touch();
   std::optional<SearchLine> touch_in_progress() const;
 
+  // machine.stop and machine.abort are counted: a manual command of several motions checks before
+  // each that no stop came since it began, since a stop reaches only a motion that is running.
+  void count_stop() { ++stops_; }
+  std::uint64_t stops() const { return stops_; }
+
  private:
   std::unique_ptr<hal::Cmm> cmm_;
   nlohmann::json block_;
@@ -76,6 +83,7 @@ class MachineLink {
   std::filesystem::path touch_file_;
   mutable std::mutex touch_mutex_;
   std::optional<SearchLine> touch_;
+  std::atomic<std::uint64_t> stops_{0};
 };
 
 nlohmann::json fault_json(const std::exception& e);  // {"kind", "message"}; kind "Internal" for a non-fault

@@ -1,5 +1,8 @@
 #include "daemon/service_methods.hpp"
 
+#include <cstdint>
+#include <functional>
+
 #include <spdlog/spdlog.h>
 
 #include "daemon/plan_preview.hpp"
@@ -29,6 +32,8 @@ std::string text(const nlohmann::json& params, const char* key, const std::strin
 }
 
 // Runs a manual machine command with the machine to itself, faults as −32013 with their kind.
+// `f(cmm, check_stop)` calls check_stop before each of its motions: a machine.stop that came since
+// the command began ends it there (Aborted), as one during a motion does.
 template <class F>
 nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
   std::optional<MachineLink::Lease> lease = s.machine.lease_after_reconnect(what, std::chrono::seconds(10));
@@ -36,15 +41,19 @@ nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
     const std::string holder = s.machine.holder().value_or("another command");
     throw RpcError(rpc_code::machine_busy, "the machine is busy: " + holder + " holds it", {{"holder", holder}});
   }
+  const std::uint64_t stops = s.machine.stops();
+  const std::function<void()> check_stop = [&s, stops] {
+    if (s.machine.stops() != stops) throw hal::Fault(hal::FaultKind::aborted, "stopped by machine.stop between motions");
+  };
   try {
     s.machine.bring_up();
     // A job stopped mid-touch left the ball on its search line: out the way it came first.
     if (const auto line = s.machine.touch_in_progress(); line && s.machine.cmm().status().homed) {
       const planner::MachineDescription& d = s.config.description;
-      leave_touch(s.machine.cmm(), line->start, line->direction, d.clearance_z, {0, d.probe_speed_mm_s});
+      leave_touch(s.machine.cmm(), line->start, line->direction, d.clearance_z, {0, d.probe_speed_mm_s}, check_stop);
       s.machine.left_touch();
     }
-    return f(s.machine.cmm());
+    return f(s.machine.cmm(), check_stop);
   } catch (const hal::Fault& fault) {
     throw RpcError(rpc_code::machine_fault, what + ": " + fault.what(), {{"kind", hal::to_string(fault.kind())}});
   } catch (const hal::StateError& e) {
@@ -61,7 +70,8 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
           return j;
         }});
   d.add("machine.home", {Role::operator_, true, [&s](const nlohmann::json&, RpcContext&) {
-          return with_machine(s, "machine.home", [&s](hal::Cmm& cmm) {
+          return with_machine(s, "machine.home", [&s](hal::Cmm& cmm, const std::function<void()>& check_stop) {
+            check_stop();
             cmm.home();
             s.machine.left_touch();  // the operator homed it: wherever the ball was, it is home now
             return nlohmann::json{{"position", vec(cmm.status().position)}};
@@ -70,6 +80,7 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
   // stop and abort run on the io thread: they must never wait behind a slow method.
   d.add("machine.stop", {Role::operator_, false, [&s](const nlohmann::json&, RpcContext& ctx) {
           spdlog::warn("machine.stop from {}", ctx.peer());
+          s.machine.count_stop();
           s.jobs.machine_stopped();
           try {
             s.machine.cmm().stop();
@@ -82,6 +93,7 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
         }});
   d.add("machine.abort", {Role::operator_, false, [&s](const nlohmann::json&, RpcContext& ctx) {
           spdlog::warn("machine.abort from {}", ctx.peer());
+          s.machine.count_stop();
           s.jobs.machine_stopped();
           try {
             s.machine.cmm().abort();
@@ -92,17 +104,22 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
           return nlohmann::json::object();
         }});
   d.add("machine.reset", {Role::operator_, true, [&s](const nlohmann::json&, RpcContext&) {
-          return with_machine(s, "machine.reset", [](hal::Cmm& cmm) {
+          return with_machine(s, "machine.reset", [](hal::Cmm& cmm, const std::function<void()>&) {
             cmm.reset();
             return nlohmann::json::object();
           });
         }});
   d.add("machine.qualify", {Role::operator_, true, [&s](const nlohmann::json& params, RpcContext&) {
           const std::string tip = text(params, "tip", "");
-          return with_machine(s, "machine.qualify", [&](hal::Cmm& cmm) {
-            if (!cmm.status().homed) cmm.home();
+          return with_machine(s, "machine.qualify", [&](hal::Cmm& cmm, const std::function<void()>& check_stop) {
+            if (!cmm.status().homed) {
+              check_stop();
+              cmm.home();
+            }
             const std::string id = tip.empty() ? cmm.info().active_tip : tip;
-            const hal::TipQualification q = hal::qualify(cmm, id);
+            hal::QualificationOptions options;
+            options.before_motion = check_stop;
+            const hal::TipQualification q = hal::qualify(cmm, id, options);
             spdlog::info("tip {} qualified: r {:.5f} mm, rms {:.5f} mm", id, q.ball_radius_mm, q.residual_rms_mm);
             return nlohmann::json{{"tip", id},
                                   {"ball_radius_mm", q.ball_radius_mm},

@@ -37,12 +37,16 @@ hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double cl
 }
 
 void leave_touch(hal::Cmm& cmm, const hal::Vec3& start, const hal::Vec3& direction, double clearance_z,
-                 const TouchSpeeds& speeds) {
+                 const TouchSpeeds& speeds, const std::function<void()>& before_motion) {
   const hal::Vec3 at = cmm.status().position;
   const hal::Vec3 from_start = at - start;
   const double along = from_start.dot(direction);
   // Only when the ball is on the search line (stopped mid-search, or after its retract).
-  if ((from_start - along * direction).norm() < 1e-3 && along > 1e-6) cmm.move({start, speeds.probe_mm_s});
+  if ((from_start - along * direction).norm() < 1e-3 && along > 1e-6) {
+    if (before_motion) before_motion();
+    cmm.move({start, speeds.probe_mm_s});
+  }
+  if (before_motion) before_motion();
   rise_to_clearance(cmm, clearance_z, speeds);
 }
 

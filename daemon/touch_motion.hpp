@@ -30,8 +30,8 @@ void rise_to_clearance(hal::Cmm& cmm, double clearance_z, const TouchSpeeds& spe
 
 // After a stop in the middle of a touch: back along the search line to its start, then up to the
 // clearance plane, so the ball leaves the way it came in (a straight rise from beside a wall or
-// inside a bore could hit what the plan's approach avoided).
+// inside a bore could hit what the plan's approach avoided). `before_motion` as for run_touch.
 void leave_touch(hal::Cmm& cmm, const hal::Vec3& start, const hal::Vec3& direction, double clearance_z,
-                 const TouchSpeeds& speeds);
+                 const TouchSpeeds& speeds, const std::function<void()>& before_motion = {});
 
 }  // namespace cmm::daemon

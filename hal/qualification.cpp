@@ -44,12 +44,16 @@ TipQualification qualify(Cmm& cmm, const std::string& tip_id, const Qualificatio
                          std::sin(latitude));
   }
 
+  const auto move = [&](const Vec3& target) {
+    if (options.before_motion) options.before_motion();
+    cmm.move({target, 0});
+  };
   std::vector<Vec3> centres;
   for (const Vec3& u : outward) {
     Vec3 start = centre + start_radius * u;
     Vec3 above(start.x(), start.y(), safe_z);
-    cmm.move({Vec3(cmm.status().position.x(), cmm.status().position.y(), safe_z), 0});
-    cmm.move({above, 0});
+    move(Vec3(cmm.status().position.x(), cmm.status().position.y(), safe_z));
+    move(above);
     ProbeMove probe;
     probe.start = start;
     probe.direction = -u;
@@ -57,10 +61,11 @@ TipQualification qualify(Cmm& cmm, const std::string& tip_id, const Qualificatio
     probe.speed_mm_s = speed;
     probe.retract_mm = start_radius - reach;
     probe.fail_on_miss = true;
+    if (options.before_motion) options.before_motion();
     TouchResult touch = cmm.probe(probe);
     centres.push_back(touch.centre);
   }
-  cmm.move({Vec3(cmm.status().position.x(), cmm.status().position.y(), safe_z), 0});
+  move(Vec3(cmm.status().position.x(), cmm.status().position.y(), safe_z));
 
   SphereFit fit = fit_sphere(centres);
   TipQualification q;

@@ -2,6 +2,7 @@
 // the ball centres, and record the tip's effective radius and offset (hal::Cmm::record_qualification).
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "hal/cmm.hpp"
@@ -13,6 +14,9 @@ struct QualificationOptions {
   double ring_latitude_deg = 30;  // above the sphere's equator; keeps clear of its stem
   double search_mm = 4;          // each search starts this far outside the nominal surface
   double speed_mm_s = 0;         // 0: the machine's probe speed
+  // Runs before each motion and may throw to end the qualification between them: a stop() reaches
+  // only a motion that is running.
+  std::function<void()> before_motion;
 };
 
 // Selects `tip_id`, measures it and records the result, which it also returns. The moves between

@@ -340,6 +340,27 @@ TYPED_TEST(CmmConformance, QualificationFindsTheTrueTip) {
   EXPECT_NEAR(r.centre.z(), kTop + 0.9985, 0.006);
 }
 
+// What machine.stop relies on during a qualification: a stop() reaches only a running motion, so
+// the hook before each motion ends it between two, and nothing moves after.
+TYPED_TEST(CmmConformance, AQualificationEndsBetweenMotionsWhereItsHookThrows) {
+  hal::Cmm& cmm = this->open();
+  cmm.home();
+  ASSERT_FALSE(cmm.info().tips.front().qualification.has_value());
+  int motions = 0;
+  Vec3 held = Vec3::Constant(NAN);
+  hal::QualificationOptions options;
+  options.before_motion = [&] {
+    if (++motions == 5) {  // the first touch made, the ball back up, before the move across to the second
+      held = cmm.status().position;
+      throw hal::Fault(hal::FaultKind::aborted, "stopped between motions");
+    }
+  };
+  EXPECT_THROW(hal::qualify(cmm, "T1", options), hal::Fault);
+  EXPECT_EQ(motions, 5);
+  EXPECT_LT((cmm.status().position - held).norm(), 1e-6) << "the machine moved after the hook ended the qualification";
+  EXPECT_FALSE(cmm.info().tips.front().qualification.has_value()) << "a qualification cut short was recorded";
+}
+
 TYPED_TEST(CmmConformance, InjectedFaultsSurfaceTypedAndInTime) {
   auto within = [](auto&& f, double seconds) {
     const auto t0 = Clock::now();

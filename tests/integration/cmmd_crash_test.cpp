@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <future>
 #include <optional>
 #include <random>
 #include <set>
@@ -18,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cmmd_instance.hpp"
+#include "daemon/rpc_error.hpp"
 #include "daemon/touch_journal.hpp"
 #include "geometry/analytic_parts.hpp"
 #include "geometry/true_edge_distance.hpp"
@@ -255,6 +257,7 @@ class Cmmd {
     return json::parse(in);
   }
   json status() { return client().call("machine.status"); }
+  daemon::RpcClient connect() const { return cmmd_.client(); }  // one more client, e.g. for another thread
 
   daemon::RpcClient& watch() { return *watch_; }
   daemon::RpcClient& client() { return *client_; }
@@ -572,6 +575,36 @@ TEST(CmmdJobControl, CancelBetweenTouchesLeavesTheBallOnTheClearancePlane) {
   d.client().call("job.cancel", {{"job", id}});
   expect_cancelled_clear_of_the_part(d, id);
   EXPECT_EQ(testing::journal_touch_ids(folder).size(), made) << "the cancel came after the next touch began";
+  EXPECT_EQ(d.terminate(), 0);
+}
+
+// machine.stop ends a qualification in progress with Aborted, whether it meets one of its motions
+// or comes between two (the motion after is not started); a stop that came before the next
+// qualification does not end that one.
+TEST(CmmdJobControl, AStopEndsAQualificationInProgressAndTheNextOneRuns) {
+  const Scratch dir("qualify_stop");
+  Cmmd d(dir.path / "cmmd", sim_machine(20));  // a qualification takes about two seconds
+  d.start();
+  d.client().call("machine.home", json::object(), wait_s);
+  auto qualifying = std::async(std::launch::async, [&d] {
+    daemon::RpcClient client = d.connect();
+    try {
+      return client.call("machine.qualify", json::object(), wait_s);
+    } catch (const daemon::RpcError& e) {
+      return json{{"code", e.code()}, {"message", e.what()}, {"data", e.data()}};
+    }
+  });
+  while (!d.status().value("moving", false))
+    ASSERT_NE(qualifying.wait_for(std::chrono::seconds(0)), std::future_status::ready)
+        << "the qualification ended before it was seen moving: " << qualifying.get().dump();
+  d.client().call("machine.stop");
+  const json stopped = qualifying.get();
+  EXPECT_EQ(stopped.value("code", 0), daemon::rpc_code::machine_fault) << stopped.dump();
+  EXPECT_EQ(stopped.value("data", json::object()).value("kind", ""), "Aborted") << stopped.dump();
+  EXPECT_FALSE(d.status().at("moving").get<bool>());
+
+  const json q = d.client().call("machine.qualify", json::object(), wait_s);
+  EXPECT_EQ(q.at("touches"), 9) << q.dump();
   EXPECT_EQ(d.terminate(), 0);
 }
 
