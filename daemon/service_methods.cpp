@@ -36,12 +36,12 @@ std::string text(const nlohmann::json& params, const char* key, const std::strin
 // the command began ends it there (Aborted), as one during a motion does.
 template <class F>
 nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
+  const std::uint64_t stops = s.machine.stops();  // before the wait: a stop while it waits ends it too
   std::optional<MachineLink::Lease> lease = s.machine.lease_after_reconnect(what, std::chrono::seconds(10));
   if (!lease) {
     const std::string holder = s.machine.holder().value_or("another command");
     throw RpcError(rpc_code::machine_busy, "the machine is busy: " + holder + " holds it", {{"holder", holder}});
   }
-  const std::uint64_t stops = s.machine.stops();
   const std::function<void()> check_stop = [&s, stops] {
     if (s.machine.stops() != stops) throw hal::Fault(hal::FaultKind::aborted, "stopped by machine.stop between motions");
   };
