@@ -390,8 +390,8 @@ TEST(CmmdCrash, CmmSimKilledMidMovePausesTheJobWithCommLostAndResumeOnTheSamePor
   const std::filesystem::path sim_config = dir.path / "scan" / "sim.json";
   std::mt19937 rng(kill_seed);
   std::printf("kill seed %u\n", kill_seed);
-  const int port = testing::free_tcp_port();
-  auto sim = std::make_unique<testing::SimulatorProcess>(sim_config, wall_time_scale, port);
+  auto sim = std::make_unique<testing::SimulatorProcess>(sim_config, wall_time_scale);
+  const int port = sim->port;  // the port cmmd keeps reconnecting to, where cmm-sim comes back
   Cmmd d(dir.path / "cmmd", testing::modbus_block(port), machine_description());
   d.start();
   const int id = testing::submit_job(d.client(), scan, request);

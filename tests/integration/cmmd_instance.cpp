@@ -1,9 +1,6 @@
 #include "cmmd_instance.hpp"
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
 #include <signal.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -137,20 +134,6 @@ SimulatorProcess::SimulatorProcess(const std::filesystem::path& config, double t
 
 nlohmann::json modbus_block(int port) {
   return {{"driver", "modbus"}, {"host", "127.0.0.1"}, {"port", port}, {"connect_attempts", 3}};
-}
-
-int free_tcp_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) throw std::runtime_error("free_tcp_port: socket() failed");
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t length = sizeof address;
-  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0 &&
-                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) == 0;
-  ::close(fd);
-  if (!ok) throw std::runtime_error("free_tcp_port: cannot bind a loopback port");
-  return ntohs(address.sin_port);
 }
 
 nlohmann::json wait_for_notification(daemon::RpcClient& client, const std::string& what,

@@ -67,9 +67,6 @@ struct SimulatorProcess {
 };
 // cmmd.json's machine block for a cmm-sim on 127.0.0.1:port.
 nlohmann::json modbus_block(int port);
-// A loopback TCP port that was free a moment ago: for a child that must listen on a port known
-// before it starts (cmm-sim started again on the port cmmd keeps reconnecting to).
-int free_tcp_port();
 
 // The next notification (as {"method", "params"}) that `match` accepts, the others dropped; throws
 // std::runtime_error naming `what` after timeout_s.
