@@ -162,6 +162,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
       // The job first, so the stop reads as a shutdown (the job becomes interrupted, not paused);
       // then the machine, so a manual command a worker is blocked in returns before the server joins it.
       jobs.shutdown();
+      machine.count_stop();  // a manual command between two motions ends there
       try {
         machine.cmm().stop();
       } catch (const std::exception&) {

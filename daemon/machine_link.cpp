@@ -56,6 +56,12 @@ std::optional<SearchLine> MachineLink::touch_in_progress() const {
   return touch_;
 }
 
+std::function<void()> MachineLink::stop_check() const {
+  return [this, since = stops_.load()] {
+    if (stops_.load() != since) throw hal::Fault(hal::FaultKind::aborted, "stopped by machine.stop");
+  };
+}
+
 void MachineLink::bring_up() {
   const std::lock_guard lock(bring_up_mutex_);
   if (!configured_) {

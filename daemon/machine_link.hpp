@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <condition_variable>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -66,10 +67,12 @@ class MachineLink {
   void left_touch();
   std::optional<SearchLine> touch_in_progress() const;
 
-  // machine.stop and machine.abort are counted: a manual command of several motions checks before
-  // each that no stop came since it began, since a stop reaches only a motion that is running.
+  // machine.stop, machine.abort and shutdown are counted: a manual command of several motions
+  // checks before and after each that no stop came since it began, since a stop reaches only a
+  // motion that is running. stop_check() is that check: it throws hal::Fault(Aborted) once a stop
+  // has been counted after it was made.
   void count_stop() { ++stops_; }
-  std::uint64_t stops() const { return stops_; }
+  std::function<void()> stop_check() const;
 
  private:
   std::unique_ptr<hal::Cmm> cmm_;

@@ -1,6 +1,5 @@
 #include "daemon/service_methods.hpp"
 
-#include <cstdint>
 #include <functional>
 
 #include <spdlog/spdlog.h>
@@ -32,19 +31,17 @@ std::string text(const nlohmann::json& params, const char* key, const std::strin
 }
 
 // Runs a manual machine command with the machine to itself, faults as −32013 with their kind.
-// `f(cmm, check_stop)` calls check_stop before each of its motions: a machine.stop that came since
-// the command began ends it there (Aborted), as one during a motion does.
+// `f(cmm, check_stop)` calls check_stop before each of its motions, and it is called once more
+// after f: a machine.stop since the command was asked for ends it (Aborted) as one during a motion
+// does, even one that came just as a motion was being sent and so did not stop it.
 template <class F>
 nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
-  const std::uint64_t stops = s.machine.stops();  // before the wait: a stop while it waits ends it too
+  const std::function<void()> check_stop = s.machine.stop_check();  // a stop while it waits counts too
   std::optional<MachineLink::Lease> lease = s.machine.lease_after_reconnect(what, std::chrono::seconds(10));
   if (!lease) {
     const std::string holder = s.machine.holder().value_or("another command");
     throw RpcError(rpc_code::machine_busy, "the machine is busy: " + holder + " holds it", {{"holder", holder}});
   }
-  const std::function<void()> check_stop = [&s, stops] {
-    if (s.machine.stops() != stops) throw hal::Fault(hal::FaultKind::aborted, "stopped by machine.stop between motions");
-  };
   try {
     s.machine.bring_up();
     // A job stopped mid-touch left the ball on its search line: out the way it came first.
@@ -53,7 +50,9 @@ nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
       leave_touch(s.machine.cmm(), line->start, line->direction, d.clearance_z, {0, d.probe_speed_mm_s}, check_stop);
       s.machine.left_touch();
     }
-    return f(s.machine.cmm(), check_stop);
+    nlohmann::json result = f(s.machine.cmm(), check_stop);
+    check_stop();
+    return result;
   } catch (const hal::Fault& fault) {
     throw RpcError(rpc_code::machine_fault, what + ": " + fault.what(), {{"kind", hal::to_string(fault.kind())}});
   } catch (const hal::StateError& e) {

@@ -14,8 +14,8 @@ struct QualificationOptions {
   double ring_latitude_deg = 30;  // above the sphere's equator; keeps clear of its stem
   double search_mm = 4;          // each search starts this far outside the nominal surface
   double speed_mm_s = 0;         // 0: the machine's probe speed
-  // Runs before each motion and may throw to end the qualification between them: a stop() reaches
-  // only a motion that is running.
+  // Runs before each motion, and once more before the result is recorded; may throw to end the
+  // qualification there: a stop() reaches only a motion that is running.
   std::function<void()> before_motion;
 };
 

@@ -359,6 +359,17 @@ TYPED_TEST(CmmConformance, AQualificationEndsBetweenMotionsWhereItsHookThrows) {
   EXPECT_EQ(motions, 5);
   EXPECT_LT((cmm.status().position - held).norm(), 1e-6) << "the machine moved after the hook ended the qualification";
   EXPECT_FALSE(cmm.info().tips.front().qualification.has_value()) << "a qualification cut short was recorded";
+
+  // Once more after the last motion: a stop that came as it was sent, too late to stop it, still
+  // keeps the result from being recorded.
+  int calls = 0;
+  const int last = 3 * options.touches + 2;  // climb, across, probe per touch; the final climb; the check
+  options.before_motion = [&] {
+    if (++calls == last) throw hal::Fault(hal::FaultKind::aborted, "stopped during the last motion");
+  };
+  EXPECT_THROW(hal::qualify(cmm, "T1", options), hal::Fault);
+  EXPECT_EQ(calls, last);
+  EXPECT_FALSE(cmm.info().tips.front().qualification.has_value()) << "a stopped qualification was recorded";
 }
 
 TYPED_TEST(CmmConformance, InjectedFaultsSurfaceTypedAndInTime) {
