@@ -53,7 +53,6 @@ TipQualification qualify(Cmm& cmm, const std::string& tip_id, const Qualificatio
     Vec3 start = centre + start_radius * u;
     Vec3 above(start.x(), start.y(), safe_z);
     move(Vec3(cmm.status().position.x(), cmm.status().position.y(), safe_z));
-  if (options.before_motion) options.before_motion();  // a stop that missed the last motion
     move(above);
     ProbeMove probe;
     probe.start = start;
@@ -67,6 +66,7 @@ TipQualification qualify(Cmm& cmm, const std::string& tip_id, const Qualificatio
     centres.push_back(touch.centre);
   }
   move(Vec3(cmm.status().position.x(), cmm.status().position.y(), safe_z));
+  if (options.before_motion) options.before_motion();  // a stop that came too late to stop the last motion
 
   SphereFit fit = fit_sphere(centres);
   TipQualification q;

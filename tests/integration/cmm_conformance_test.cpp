@@ -370,6 +370,13 @@ TYPED_TEST(CmmConformance, AQualificationEndsBetweenMotionsWhereItsHookThrows) {
   EXPECT_THROW(hal::qualify(cmm, "T1", options), hal::Fault);
   EXPECT_EQ(calls, last);
   EXPECT_FALSE(cmm.info().tips.front().qualification.has_value()) << "a stopped qualification was recorded";
+
+  // And `last` is where it is: a qualification the hook lets run calls it exactly that often.
+  calls = 0;
+  options.before_motion = [&] { ++calls; };
+  hal::qualify(cmm, "T1", options);
+  EXPECT_EQ(calls, last) << "the hook does not run once per motion and once before the result";
+  EXPECT_TRUE(cmm.info().tips.front().qualification.has_value());
 }
 
 TYPED_TEST(CmmConformance, InjectedFaultsSurfaceTypedAndInTime) {
