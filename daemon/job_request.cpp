@@ -9,28 +9,24 @@ namespace cmm::daemon {
 
 namespace {
 
-[[noreturn]] void bad(const std::string& path, const std::string& message) {
-  throw RpcError(rpc_code::invalid_params, (path.empty() ? "params" : path) + ": " + message, {{"path", path}});
-}
-
 double number(const nlohmann::json& j, const char* key, double fallback, double min, double max) {
   if (!j.contains(key)) return fallback;
   const nlohmann::json& v = j.at(key);
   const std::string path = std::string("/") + key;
-  if (!v.is_number()) bad(path, "must be a number");
+  if (!v.is_number()) throw_invalid_param(path, "must be a number");
   const double x = v.get<double>();
   if (!std::isfinite(x) || x < min || x > max)
-    bad(path, "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+    throw_invalid_param(path, "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
   return x;
 }
 
 planner::Vec3 vec3(const nlohmann::json& j, const std::string& path) {
-  if (!j.is_array() || j.size() != 3) bad(path, "must be [x, y, z]");
+  if (!j.is_array() || j.size() != 3) throw_invalid_param(path, "must be [x, y, z]");
   planner::Vec3 v;
   for (int i = 0; i < 3; ++i) {
-    if (!j[static_cast<std::size_t>(i)].is_number()) bad(path + "/" + std::to_string(i), "must be a number");
+    if (!j[static_cast<std::size_t>(i)].is_number()) throw_invalid_param(path + "/" + std::to_string(i), "must be a number");
     v[i] = j[static_cast<std::size_t>(i)].get<double>();
-    if (!std::isfinite(v[i])) bad(path + "/" + std::to_string(i), "must be finite");
+    if (!std::isfinite(v[i])) throw_invalid_param(path + "/" + std::to_string(i), "must be finite");
   }
   return v;
 }
@@ -38,12 +34,12 @@ planner::Vec3 vec3(const nlohmann::json& j, const std::string& path) {
 // [{"id", key: [x, y, z]}, …] → ids and points.
 void corner_list(const nlohmann::json& j, const std::string& path, const char* key, std::vector<int>& ids,
                  std::vector<planner::Vec3>& points) {
-  if (!j.is_array()) bad(path, std::string("must be an array of {\"id\", \"") + key + "\"}");
+  if (!j.is_array()) throw_invalid_param(path, std::string("must be an array of {\"id\", \"") + key + "\"}");
   for (std::size_t i = 0; i < j.size(); ++i) {
     const std::string at = path + "/" + std::to_string(i);
     if (!j[i].is_object() || !j[i].contains("id") || !j[i]["id"].is_number_integer())
-      bad(at + "/id", "must be an integer corner id");
-    if (!j[i].contains(key)) bad(at + "/" + key, "is missing");
+      throw_invalid_param(at + "/id", "must be an integer corner id");
+    if (!j[i].contains(key)) throw_invalid_param(at + "/" + key, "is missing");
     ids.push_back(j[i]["id"].get<int>());
     points.push_back(vec3(j[i][key], at + "/" + key));
   }
@@ -51,42 +47,42 @@ void corner_list(const nlohmann::json& j, const std::string& path, const char* k
 
 PlateMeasurement plate_measurement(const nlohmann::json& j, const planner::Plate& plate) {
   const std::string path = "/registration/measure_plate";
-  if (!j.is_object()) bad(path, "must be an object");
+  if (!j.is_object()) throw_invalid_param(path, "must be an object");
   for (const auto& [key, value] : j.items())
-    if (key != "scan_corners" && key != "rough_machine" && key != "plate") bad(path + "/" + key, "unknown field");
+    if (key != "scan_corners" && key != "rough_machine" && key != "plate") throw_invalid_param(path + "/" + key, "unknown field");
   PlateMeasurement m;
   if (!j.contains("scan_corners") || !j.contains("rough_machine"))
-    bad(path, "needs \"scan_corners\" and \"rough_machine\"");
+    throw_invalid_param(path, "needs \"scan_corners\" and \"rough_machine\"");
   corner_list(j["scan_corners"], path + "/scan_corners", "scan", m.ids, m.scan);
   std::vector<int> rough_ids;
   corner_list(j["rough_machine"], path + "/rough_machine", "machine", rough_ids, m.rough_machine);
-  if (rough_ids != m.ids) bad(path + "/rough_machine", "must name the same corners as scan_corners, in the same order");
+  if (rough_ids != m.ids) throw_invalid_param(path + "/rough_machine", "must name the same corners as scan_corners, in the same order");
   std::set<int> seen;
   for (std::size_t i = 0; i < m.ids.size(); ++i) {
     const int id = m.ids[i];
     if (id < 1 || id > plate.corner_count() || !seen.insert(id).second)
-      bad(path + "/scan_corners/" + std::to_string(i) + "/id",
+      throw_invalid_param(path + "/scan_corners/" + std::to_string(i) + "/id",
           "must be a distinct corner of the plate (1 to " + std::to_string(plate.corner_count()) + ")");
   }
-  if (m.ids.size() < 3) bad(path + "/scan_corners", "needs at least three corners");
+  if (m.ids.size() < 3) throw_invalid_param(path + "/scan_corners", "needs at least three corners");
   return m;
 }
 
 }  // namespace
 
 JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& config, bool registration_optional) {
-  if (!params.is_object()) bad("", "the job request must be an object");
+  if (!params.is_object()) throw_invalid_param("", "the job request must be an object");
   static const std::set<std::string> known = {"model", "name", "scale", "delta_mm", "spacing_mm",
                                               "feature_angle_deg", "seed", "registration"};
   for (const auto& [key, value] : params.items())
-    if (!known.contains(key)) bad("/" + key, "unknown field");
+    if (!known.contains(key)) throw_invalid_param("/" + key, "unknown field");
   JobRequest r;
-  if (!params.contains("model") || !params["model"].is_string()) bad("/model", "must be \"sha256:<hex>\" or \"file:<name>\"");
+  if (!params.contains("model") || !params["model"].is_string()) throw_invalid_param("/model", "must be \"sha256:<hex>\" or \"file:<name>\"");
   r.model = params["model"].get<std::string>();
   if (r.model.rfind("sha256:", 0) != 0 && r.model.rfind("file:", 0) != 0)
-    bad("/model", "must be \"sha256:<hex>\" or \"file:<name>\"");
+    throw_invalid_param("/model", "must be \"sha256:<hex>\" or \"file:<name>\"");
   if (params.contains("name")) {
-    if (!params["name"].is_string()) bad("/name", "must be a string");
+    if (!params["name"].is_string()) throw_invalid_param("/name", "must be a string");
     r.name = params["name"].get<std::string>();
   }
   r.scale = number(params, "scale", 1, 1e-6, 1e6);
@@ -98,22 +94,22 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   if (registration_optional && !params.contains("registration")) return r;
 
   if (!params.contains("registration") || !params["registration"].is_object())
-    bad("/registration", "must be {\"corners\": [...]} or {\"measure_plate\": {...}}");
+    throw_invalid_param("/registration", "must be {\"corners\": [...]} or {\"measure_plate\": {...}}");
   const nlohmann::json& reg = params["registration"];
   if (reg.contains("measure_plate") == reg.contains("corners"))
-    bad("/registration", "needs exactly one of \"corners\" and \"measure_plate\"");
+    throw_invalid_param("/registration", "needs exactly one of \"corners\" and \"measure_plate\"");
   try {
     const nlohmann::json* plate = reg.contains("measure_plate") && reg["measure_plate"].is_object() &&
                                           reg["measure_plate"].contains("plate")
                                       ? &reg["measure_plate"]["plate"]
                                       : reg.contains("plate") ? &reg["plate"] : nullptr;
     if (plate != nullptr) {
-      if (!plate->is_object()) bad("/registration/plate", "must be a plate object (docs/registration.md)");
+      if (!plate->is_object()) throw_invalid_param("/registration/plate", "must be a plate object (docs/registration.md)");
       r.plate = planner::plate_from_json(*plate, "job request /registration/plate");
     }
   } catch (const std::exception& e) {
     if (dynamic_cast<const RpcError*>(&e)) throw;
-    bad("/registration/plate", e.what());
+    throw_invalid_param("/registration/plate", e.what());
   }
   if (reg.contains("measure_plate")) {
     r.measure = plate_measurement(reg["measure_plate"], r.plate);
@@ -123,7 +119,7 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
       given["plate"] = planner::to_json(r.plate);
       r.given = planner::registration_from_json(given, "job request /registration");
     } catch (const std::exception& e) {
-      bad("/registration", e.what());
+      throw_invalid_param("/registration", e.what());
     }
   }
   return r;

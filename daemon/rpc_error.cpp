@@ -11,6 +11,10 @@ const char* to_string(Role role) {
   return "?";
 }
 
+void throw_invalid_param(const std::string& path, const std::string& message) {
+  throw RpcError(rpc_code::invalid_params, (path.empty() ? "params" : path) + ": " + message, {{"path", path}});
+}
+
 Role role_from_string(const std::string& text) {
   if (text == "none") return Role::none;
   if (text == "observer") return Role::observer;

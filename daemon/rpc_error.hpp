@@ -44,6 +44,10 @@ class RpcError : public std::runtime_error {
   nlohmann::json data_;
 };
 
+// −32602 for the member at JSON Pointer `path` of a request's params ("" for params itself): the
+// message names the member, the data carries its path for a client to point at the field.
+[[noreturn]] void throw_invalid_param(const std::string& path, const std::string& message);
+
 // Who a connection is: each method needs at least one of these (docs/api.md, Access).
 enum class Role { none, observer, operator_ };
 const char* to_string(Role role);

@@ -14,19 +14,15 @@ namespace cmm::daemon {
 
 namespace {
 
-[[noreturn]] void bad_param(const std::string& path, const std::string& message) {
-  throw RpcError(rpc_code::invalid_params, (path.empty() ? "params" : path) + ": " + message, {{"path", path}});
-}
-
 int job_id(const nlohmann::json& params) {
   if (!params.is_object() || !params.contains("job") || !params["job"].is_number_integer())
-    bad_param("/job", "must be a job id (integer)");
+    throw_invalid_param("/job", "must be a job id (integer)");
   return params["job"].get<int>();
 }
 
 std::string text(const nlohmann::json& params, const char* key, const std::string& fallback) {
   if (!params.is_object() || !params.contains(key)) return fallback;
-  if (!params[key].is_string()) bad_param(std::string("/") + key, "must be a string");
+  if (!params[key].is_string()) throw_invalid_param(std::string("/") + key, "must be a string");
   return params[key].get<std::string>();
 }
 
@@ -132,13 +128,13 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
 
 void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
   d.add("model.upload", {Role::operator_, true, [&s](const nlohmann::json& p, RpcContext&) {
-          if (!p.is_object()) bad_param("", "must be an object");
+          if (!p.is_object()) throw_invalid_param("", "must be an object");
           UploadChunk chunk;
           chunk.name = text(p, "name", "");
           chunk.sha256_hex = text(p, "sha256", "");
           chunk.data_base64 = text(p, "data", "");
           for (const char* key : {"size", "offset"})
-            if (!p.contains(key) || !p[key].is_number_unsigned()) bad_param(std::string("/") + key, "must be a byte count");
+            if (!p.contains(key) || !p[key].is_number_unsigned()) throw_invalid_param(std::string("/") + key, "must be a byte count");
           chunk.size = p["size"].get<std::uint64_t>();
           chunk.offset = p["offset"].get<std::uint64_t>();
           const UploadStatus st = s.models.upload(chunk);
@@ -178,7 +174,7 @@ void add_job_methods(RpcDispatcher& d, Service& s) {
   d.add("job.resume", {Role::operator_, false, [&s](const nlohmann::json& p, RpcContext&) {
           bool reregister = false;
           if (p.contains("reregister")) {
-            if (!p["reregister"].is_boolean()) bad_param("/reregister", "must be true or false");
+            if (!p["reregister"].is_boolean()) throw_invalid_param("/reregister", "must be true or false");
             reregister = p["reregister"].get<bool>();
           }
           return s.jobs.resume(job_id(p), reregister);
