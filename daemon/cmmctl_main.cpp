@@ -49,7 +49,7 @@ json read_json_file(const std::string& file) {
   if (!in) throw std::runtime_error(file + ": cannot be opened");
   try {
     return json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // out_of_range too: a number like 1e400
     throw std::runtime_error(file + ": not JSON: " + e.what());
   }
 }

@@ -126,7 +126,7 @@ DaemonConfig read_daemon_config(const std::filesystem::path& file) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // out_of_range too: a number like 1e400
     throw hal::ConfigError(file.string(), {std::string("not JSON: ") + e.what()});
   }
   return daemon_config_from_json(j, file.string(), file.parent_path());

@@ -1,6 +1,7 @@
 #include "daemon/job_request.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <set>
 
 #include "daemon/rpc_error.hpp"
@@ -40,7 +41,10 @@ void corner_list(const nlohmann::json& j, const std::string& path, const char* k
     if (!j[i].is_object() || !j[i].contains("id") || !j[i]["id"].is_number_integer())
       throw_invalid_param(at + "/id", "must be an integer corner id");
     if (!j[i].contains(key)) throw_invalid_param(at + "/" + key, "is missing");
-    ids.push_back(j[i]["id"].get<int>());
+    // Out of int's range is no corner (plate_measurement names the valid ids); not narrowed to one.
+    const nlohmann::json& id = j[i]["id"];
+    const bool fits = id.is_number_unsigned() ? id.get<std::uint64_t>() <= 1000000 : id.get<std::int64_t>() >= -1000000 && id.get<std::int64_t>() <= 1000000;
+    ids.push_back(fits ? id.get<int>() : -1);
     points.push_back(vec3(j[i][key], at + "/" + key));
   }
 }

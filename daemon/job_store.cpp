@@ -55,6 +55,8 @@ nlohmann::json parse_file(const fs::path& file, const std::string& text) {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     throw geometry::FileError::at_byte(file, e.byte, std::string("not JSON: ") + e.what());
+  } catch (const nlohmann::json::exception& e) {  // a number beyond a double's range (1e400)
+    throw geometry::FileError::whole(file, std::string("not JSON: ") + e.what());
   }
 }
 

@@ -134,10 +134,49 @@ std::optional<std::string> RpcDispatcher::handle_line(std::string_view line, Rpc
   return to_wire(*response);
 }
 
+namespace {
+
+// Where and why a text stops being JSON that a double can hold. json::parse reports a number beyond
+// a double's range (1e400, a 5,000-digit integer) as out_of_range, without where it is; the SAX
+// pass over the same text reports both, for −32700's data.byte.
+class ProblemLocator : public json::json_sax_t {
+ public:
+  std::size_t byte = 0;
+  std::string what = "not JSON";
+  bool null() override { return true; }
+  bool boolean(bool) override { return true; }
+  bool number_integer(number_integer_t) override { return true; }
+  bool number_unsigned(number_unsigned_t) override { return true; }
+  bool number_float(number_float_t, const string_t&) override { return true; }
+  bool string(string_t&) override { return true; }
+  bool binary(binary_t&) override { return true; }
+  bool start_object(std::size_t) override { return true; }
+  bool key(string_t&) override { return true; }
+  bool end_object() override { return true; }
+  bool start_array(std::size_t) override { return true; }
+  bool end_array() override { return true; }
+  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& e) override {
+    byte = position;
+    what = e.what();
+    if (what.size() > 200) what = what.substr(0, 200) + "…";  // a 5,000-digit number is not quoted back whole
+    return false;
+  }
+};
+
+// nlohmann's "[json.exception.parse_error.101] " prefix is for programmers, not for clients.
+std::string without_exception_prefix(std::string what) {
+  if (const auto end = what.find("] "); what.rfind("[json.exception", 0) == 0 && end != std::string::npos)
+    what.erase(0, end + 2);
+  return what;
+}
+
+}  // namespace
+
 json parse_message(std::string_view line, int max_depth) {
   int depth = 0;
   bool in_string = false, escaped = false;
-  for (const char c : line) {
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
     if (in_string) {
       if (escaped) escaped = false;
       else if (c == '\\') escaped = true;
@@ -146,7 +185,8 @@ json parse_message(std::string_view line, int max_depth) {
       in_string = true;
     } else if (c == '[' || c == '{') {
       if (++depth > max_depth)
-        throw RpcError(rpc_code::parse_error, "parse error: nesting deeper than " + std::to_string(max_depth));
+        throw RpcError(rpc_code::parse_error, "parse error: nesting deeper than " + std::to_string(max_depth),
+                       {{"byte", i + 1}});
     } else if (c == ']' || c == '}') {
       --depth;
     }
@@ -154,10 +194,13 @@ json parse_message(std::string_view line, int max_depth) {
   try {
     return json::parse(line);
   } catch (const json::parse_error& e) {
-    std::string what = e.what();
-    if (const auto end = what.find("] "); what.rfind("[json.exception", 0) == 0 && end != std::string::npos)
-      what.erase(0, end + 2);
-    throw RpcError(rpc_code::parse_error, what, {{"byte", e.byte}});
+    throw RpcError(rpc_code::parse_error, without_exception_prefix(e.what()), {{"byte", e.byte}});
+  } catch (const json::exception&) {
+    ProblemLocator problem;
+    json::sax_parse(line, &problem);
+    throw RpcError(rpc_code::parse_error, "parse error at byte " + std::to_string(problem.byte) + ": " +
+                                              without_exception_prefix(problem.what),
+                   {{"byte", problem.byte}});
   }
 }
 

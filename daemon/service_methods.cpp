@@ -1,6 +1,8 @@
 #include "daemon/service_methods.hpp"
 
+#include <cstdint>
 #include <functional>
+#include <limits>
 
 #include <spdlog/spdlog.h>
 
@@ -17,7 +19,12 @@ namespace {
 int job_id(const nlohmann::json& params) {
   if (!params.is_object() || !params.contains("job") || !params["job"].is_number_integer())
     throw_invalid_param("/job", "must be a job id (integer)");
-  return params["job"].get<int>();
+  // Compared before narrowing: job 4294967297 is no job, not job 1.
+  const nlohmann::json& id = params["job"];
+  const bool fits = id.is_number_unsigned() ? id.get<std::uint64_t>() <= std::numeric_limits<int>::max()
+                                            : id.get<std::int64_t>() >= 0 && id.get<std::int64_t>() <= std::numeric_limits<int>::max();
+  if (!fits) throw RpcError(rpc_code::not_found, "no job " + id.dump(), {{"job", id}});
+  return id.get<int>();
 }
 
 std::string text(const nlohmann::json& params, const char* key, const std::string& fallback) {

@@ -24,6 +24,15 @@ double positive(const nlohmann::json& j, const std::string& source, const std::s
   return value;
 }
 
+int integer(const nlohmann::json& j, const std::string& source, const std::string& field, int min, int max) {
+  const std::string range = "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
+  if (!j.is_number_integer()) fail_field(source, field, "expected " + range + ", got " + j.dump());
+  const bool fits = j.is_number_unsigned() ? j.get<std::uint64_t>() <= static_cast<std::uint64_t>(max)
+                                           : j.get<std::int64_t>() >= min && j.get<std::int64_t>() <= max;
+  if (!fits) fail_field(source, field, "expected " + range + ", got " + j.dump());
+  return j.get<int>();
+}
+
 void only_known_keys(const nlohmann::json& j, const std::string& source, const std::string& field,
                      const std::set<std::string>& known) {
   for (const auto& [key, value] : j.items()) {

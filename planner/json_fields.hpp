@@ -14,6 +14,8 @@ namespace cmm::planner {
 // A finite number, and one above zero.
 double number(const nlohmann::json& j, const std::string& source, const std::string& field);
 double positive(const nlohmann::json& j, const std::string& source, const std::string& field);
+// An integer in [min, max], compared before narrowing: 4294967297 is not corner 1.
+int integer(const nlohmann::json& j, const std::string& source, const std::string& field, int min, int max);
 
 // Refuses any key of object `j` (at `field`, "" for the top level) not in `known`: a typo such as
 // "thicknes_mm" would otherwise silently keep a default.

@@ -124,7 +124,7 @@ MachineDescription read_machine(const std::filesystem::path& file) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // out_of_range too: a number like 1e400
     throw geometry::FileError::whole(file, std::string("not valid JSON (") + e.what() + ")");
   }
   return machine_from_json(j, file.string());

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <set>
 
 #include "geometry/file_error.hpp"
@@ -107,9 +108,10 @@ Plate plate_from_json(const json& j, const std::string& source) {
   if (kind == "chamfer") {
     only_known_keys(f, source, "fiducial", {"kind", "corner", "size_mm"});
     fiducial.kind = PlateFiducial::Kind::chamfer;
-    if (!f.contains("corner") || !f["corner"].is_number_integer())
+    if (!f.contains("corner"))
       fail(source, "fiducial.corner", "expected the corner id (1 … " + std::to_string(n) + ")");
-    fiducial.corner = f["corner"].get<int>();
+    fiducial.corner = integer(f["corner"], source, "fiducial.corner", std::numeric_limits<int>::min(),
+                              std::numeric_limits<int>::max());
     if (fiducial.corner < 1 || fiducial.corner > n)
       fail(source, "fiducial.corner",
            std::to_string(fiducial.corner) + " is not a corner id (1 … " + std::to_string(n) + ")");
@@ -170,6 +172,8 @@ Plate read_plate(const std::filesystem::path& file) {
     j = json::parse(in);
   } catch (const json::parse_error& e) {
     throw FileError::at_byte(file, e.byte, "not valid JSON");
+  } catch (const json::exception& e) {  // a number beyond a double's range (1e400)
+    throw FileError::whole(file, std::string("not valid JSON: ") + e.what());
   }
   return plate_from_json(j, file.string());
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <set>
 
@@ -303,8 +304,8 @@ RegistrationInput registration_from_json(const json& j, const std::string& sourc
     if (!c.is_object()) fail(source, field, "expected {\"id\", \"scan\", \"machine\"}");
     only_known_keys(c, source, field, {"id", "scan", "machine"});
     CornerPair pair;
-    if (!c.contains("id") || !c["id"].is_number_integer()) fail(source, field + ".id", "expected an integer corner id");
-    pair.id = c["id"].get<int>();
+    if (!c.contains("id")) fail(source, field + ".id", "expected an integer corner id");
+    pair.id = integer(c["id"], source, field + ".id", 1, std::numeric_limits<int>::max());
     if (!c.contains("scan")) fail(source, field + ".scan", "missing");
     if (!c.contains("machine")) fail(source, field + ".machine", "missing");
     pair.scan = vec3(c["scan"], source, field + ".scan");
@@ -341,6 +342,8 @@ RegistrationInput read_registration(const std::filesystem::path& file) {
     j = json::parse(in);
   } catch (const json::parse_error& e) {
     throw FileError::at_byte(file, e.byte, "not valid JSON");
+  } catch (const json::exception& e) {  // a number beyond a double's range (1e400)
+    throw FileError::whole(file, std::string("not valid JSON: ") + e.what());
   }
   return registration_from_json(j, file.string(), file.parent_path());
 }

@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
       std::ifstream in(config_file);
       try {
         block = nlohmann::json::parse(in);
-      } catch (const nlohmann::json::parse_error& e) {
+      } catch (const nlohmann::json::exception& e) {  // out_of_range too: a number like 1e400
         std::cerr << "cmm-sim: " << config_file << ": " << e.what() << "\n";
         return 2;
       }

@@ -180,11 +180,36 @@ TEST_F(DispatcherTest, ParseErrorsSayWhere) {
   EXPECT_EQ(error_of("").value("code", 0), rpc_code::parse_error);
 }
 
+// A number beyond a double's range is a parse error with its byte, in any place a number may stand;
+// nlohmann-json reports it as out_of_range, which once escaped and stopped cmmd (issue 13, D1).
+TEST_F(DispatcherTest, NumbersBeyondADoubleAreParseErrorsWithTheirByte) {
+  // data.byte is where parsing stopped, as for every parse error: the number's last character.
+  const std::string digits(5000, '9');
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"jsonrpc":"2.0","method":"server.info","id":1e400})", "1e400"},
+      {R"({"jsonrpc":"2.0","method":"echo","params":{"x":1e999},"id":1})", "1e999"},
+      {R"({"jsonrpc":"2.0","method":"echo","params":[-1e400],"id":1})", "-1e400"},
+      {R"([{"jsonrpc":"2.0","method":"echo","id":1},{"jsonrpc":"2.0","method":"echo","id":1E+400}])", "1E+400"},
+      {R"({"jsonrpc":"2.0","method":"echo","id":)" + digits + "}", digits},
+  };
+  for (const auto& [text, number] : cases) {
+    const json error = error_of(text);
+    EXPECT_EQ(error.value("code", 0), rpc_code::parse_error) << text.substr(0, 80) << ": " << error;
+    EXPECT_EQ(error["data"].value("byte", std::size_t{0}), text.find(number) + number.size()) << text.substr(0, 80);
+    const std::string message = error.value("message", std::string());
+    EXPECT_NE(message.find("overflow"), std::string::npos) << message;
+    EXPECT_LT(message.size(), 300u) << "the reply quotes the whole number back";
+  }
+  // The largest double still reads.
+  EXPECT_EQ(parse_message(R"({"x":1.7976931348623157e308})").at("x").get<double>(), 1.7976931348623157e308);
+}
+
 TEST_F(DispatcherTest, DeepNestingIsRefusedBeforeParsing) {
   const std::string deep = std::string(100000, '[') + std::string(100000, ']');
   const json error = error_of(deep);
   EXPECT_EQ(error.value("code", 0), rpc_code::parse_error);
   EXPECT_NE(error.value("message", std::string()).find("nesting"), std::string::npos);
+  EXPECT_EQ(error["data"]["byte"], 129) << error;  // the bracket that went one level too deep
   // Brackets inside strings (escaped quotes too) are text, not nesting.
   const std::string text = "\\\"" + std::string(500, '[');
   EXPECT_EQ(parse_message(json({{"s", text}}).dump()).at("s"), text);
