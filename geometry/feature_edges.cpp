@@ -186,7 +186,9 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
 
   const Points* normals = &faces.normals;
   if (result.noisy) {
-    result.filtered_normals = bilateral_filtered_normals(mesh, adjacency, faces);
+    NormalFilterOptions filter;
+    filter.cancel = options.cancel;
+    result.filtered_normals = bilateral_filtered_normals(mesh, adjacency, faces, filter);
     normals = &result.filtered_normals;
     cosines(result.filtered_normals);
   }
@@ -202,7 +204,9 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
       (result.noisy ? options.noisy_min_dangling_edges : options.min_dangling_edges) * result.mean_edge_length;
   const double min_spoke_length =
       (result.noisy ? options.noisy_min_spoke_edges : options.min_spoke_edges) * result.mean_edge_length;
+  options.cancel.throw_if_requested("feature edge detection");
   prune_dangling(mesh, adjacency, min_length, min_spoke_length, result.is_feature);
+  options.cancel.throw_if_requested("feature edge detection");
   extend_free_ends(mesh, adjacency, cos_dihedral, std::cos(options.continuation_fraction * threshold), result.is_feature);
   result.curves = prune_dangling(mesh, adjacency, min_length, min_spoke_length, result.is_feature);
 

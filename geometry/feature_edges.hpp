@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "geometry/cancellation.hpp"
 #include "geometry/edge_adjacency.hpp"
 #include "geometry/face_geometry.hpp"
 
@@ -29,6 +30,7 @@ struct FeatureOptions {
   // for a while down the cone.
   double min_spoke_edges = 8;
   double noisy_min_spoke_edges = 16;
+  CancelCheck cancel;  // polled between the steps (and the normal filter's iterations)
 };
 
 // A chain of feature edges between junctions (vertices where other than two feature edges meet) or

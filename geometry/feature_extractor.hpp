@@ -47,11 +47,12 @@ inline double angle_between(const Vec3& a, const Vec3& b) { return std::atan2(a.
 class Extractor {
  public:
   Extractor(const TriangleMesh& mesh, const FeatureModelOptions& options);
-  FeatureModel run();
+  FeatureModel run();  // throws TooManyPoints, Cancelled
 
  private:
   // feature_model.cpp
   std::vector<CurveSample> sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points);
+  void check_point_count() const;
   int smoothing_window(std::size_t vertices, bool closed) const;
   bool two_distinct_sides(const std::vector<CurveSample>& samples) const;
   SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn);

@@ -25,8 +25,12 @@ std::vector<Vec3> positions(const TriangleMesh& mesh, const std::vector<int>& ve
 
 Extractor::Extractor(const TriangleMesh& mesh, const FeatureModelOptions& options)
     : mesh_(mesh), options_(options), adjacency_(edge_adjacency(mesh)), faces_(face_geometry(mesh)) {
+  options.cancel.throw_if_requested("mesh adjacency");
   model_.topology = topology_report(mesh, adjacency_);
-  model_.features = feature_edges(mesh, adjacency_, faces_, options.features);
+  FeatureOptions features = options.features;
+  features.cancel = options.cancel;
+  model_.features = feature_edges(mesh, adjacency_, faces_, features);
+  options.cancel.throw_if_requested("feature edge detection");
   model_.loops = boundary_loops(mesh, adjacency_);
   radius_ = (model_.features.noisy ? options.noisy_neighbourhood_edges : options.neighbourhood_edges) *
             model_.features.mean_edge_length;
@@ -34,7 +38,24 @@ Extractor::Extractor(const TriangleMesh& mesh, const FeatureModelOptions& option
   half_window_ = model_.features.noisy ? 3 : 0;
 }
 
+// The points sample_polyline will make, counted from the curves' lengths before any is made: the
+// side normals behind each point are the costly part, and a fine spacing on a large model asks
+// for millions of them.
+void Extractor::check_point_count() const {
+  if (options_.max_points == 0 || !(options_.spacing > 0)) return;
+  double points = 0;
+  for (const FeatureCurve& c : model_.features.curves) points += c.length / options_.spacing + 1;
+  for (const BoundaryLoop& l : model_.loops) points += l.perimeter / options_.spacing + 1;
+  if (points <= static_cast<double>(options_.max_points)) return;
+  const auto count = static_cast<std::size_t>(std::min(points, 1e18));
+  throw TooManyPoints("the feature curves at spacing " + std::to_string(options_.spacing) + " would give about " +
+                          std::to_string(count) + " reference points, more than the limit of " +
+                          std::to_string(options_.max_points) + ": use a coarser spacing",
+                      count, options_.max_points);
+}
+
 FeatureModel Extractor::run() {
+  check_point_count();
   const Points& similarity = model_.features.noisy ? model_.features.filtered_normals : faces_.normals;
   SideRegionFinder finder(mesh_, adjacency_, faces_, model_.features.is_feature, similarity,
                           options_.neighbourhood_max_turn_deg * std::numbers::pi / 180);
@@ -42,6 +63,7 @@ FeatureModel Extractor::run() {
   std::vector<std::vector<CurveSample>> samples(curves.size());
   std::vector<Rim> rims;
   for (std::size_t c = 0; c < curves.size(); ++c) {
+    options_.cancel.throw_if_requested("the feature curves");
     const std::vector<Vec3> raw = positions(mesh_, curves[c].vertices);
     const std::vector<Vec3> points = smooth_polyline(raw, curves[c].closed, smoothing_window(raw.size(), curves[c].closed));
     samples[c] = sample_curve(finder, curves[c], points);
@@ -54,10 +76,14 @@ FeatureModel Extractor::run() {
       if (auto rim = bore_rim(static_cast<int>(c), raw, samples[c])) rims.push_back(*rim);
     }
   }
+  options_.cancel.throw_if_requested("bore detection");
   std::vector<int> hole_of_curve = bores(finder, rims);
   for (const Rim& rim : rims) wall_normals_from_bore(rim, samples[rim.curve]);
   for (std::size_t c = 0; c < curves.size(); ++c) emit_curve_points(static_cast<int>(c), samples[c], hole_of_curve[c]);
-  for (std::size_t l = 0; l < model_.loops.size(); ++l) emit_loop_points(finder, static_cast<int>(l));
+  for (std::size_t l = 0; l < model_.loops.size(); ++l) {
+    options_.cancel.throw_if_requested("the boundary loops");
+    emit_loop_points(finder, static_cast<int>(l));
+  }
   return std::move(model_);
 }
 

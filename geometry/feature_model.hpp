@@ -2,9 +2,13 @@
 // at a spacing along sharp edges, hole rims and open boundaries, and the holes themselves.
 #pragma once
 
+#include <cstddef>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "geometry/boundary_loops.hpp"
+#include "geometry/cancellation.hpp"
 #include "geometry/edge_point.hpp"
 #include "geometry/feature_edges.hpp"
 #include "geometry/hole.hpp"
@@ -28,6 +32,17 @@ struct FeatureModelOptions {
   double inferred_wall_uncertainty_deg = 0.5;
   // A loop is a circle when its RMS radial residual is below this fraction of its radius.
   double circle_tolerance = 0.05;
+  // Refused before any side normal is estimated (TooManyPoints): the curves' length / spacing would
+  // give more reference points than this. 0: no limit.
+  std::size_t max_points = 0;
+  CancelCheck cancel;  // polled between steps and curves
+};
+
+// The model's curves at this spacing would give more reference points than options.max_points.
+struct TooManyPoints : std::length_error {
+  TooManyPoints(const std::string& what, std::size_t points, std::size_t limit)
+      : std::length_error(what), points(points), limit(limit) {}
+  std::size_t points, limit;
 };
 
 struct FeatureModel {
@@ -39,6 +54,7 @@ struct FeatureModel {
   int rejected_curves = 0;  // feature curves whose two sides turned out to face the same way
 };
 
+// Throws TooManyPoints, or Cancelled when options.cancel asks.
 FeatureModel extract_features(const TriangleMesh& mesh, const FeatureModelOptions& options = {});
 
 }  // namespace cmm::geometry

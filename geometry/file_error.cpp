@@ -15,4 +15,13 @@ FileError FileError::whole(const std::filesystem::path& file, const std::string&
   return FileError(file, file.string() + ": " + message);
 }
 
+FileError FileError::at_field(const std::filesystem::path& file, const std::string& field, std::string pointer,
+                              const std::string& message) {
+  return FileError(file, file.string() + ": " + field + ": " + message, std::move(pointer));
+}
+
+FileError FileError::nested(const FileError& inner, const std::string& prefix) {
+  return FileError(inner.file_, inner.what(), inner.pointer_.empty() ? std::string() : prefix + inner.pointer_);
+}
+
 }  // namespace cmm::geometry

@@ -15,13 +15,22 @@ class FileError : public std::runtime_error {
   static FileError at_line(const std::filesystem::path& file, std::size_t line, const std::string& message);
   static FileError at_byte(const std::filesystem::path& file, std::uint64_t offset, const std::string& message);
   static FileError whole(const std::filesystem::path& file, const std::string& message);
+  // A JSON input's field: what() reads "plate.json: fiducial.corner: …" with the field as written;
+  // `pointer` is its JSON Pointer ("/fiducial/corner"), for a client to point at.
+  static FileError at_field(const std::filesystem::path& file, const std::string& field, std::string pointer,
+                            const std::string& message);
+
+  // The same error for a field of an object nested at `prefix` ("/plate") in another input.
+  static FileError nested(const FileError& inner, const std::string& prefix);
 
   const std::filesystem::path& file() const { return file_; }
+  const std::string& json_pointer() const { return pointer_; }  // empty unless at_field
 
  private:
-  FileError(std::filesystem::path file, const std::string& full_message)
-      : std::runtime_error(full_message), file_(std::move(file)) {}
+  FileError(std::filesystem::path file, const std::string& full_message, std::string pointer = {})
+      : std::runtime_error(full_message), file_(std::move(file)), pointer_(std::move(pointer)) {}
   std::filesystem::path file_;
+  std::string pointer_;
 };
 
 }  // namespace cmm::geometry

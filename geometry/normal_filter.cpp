@@ -12,6 +12,7 @@ Points bilateral_filtered_normals(const TriangleMesh& mesh, const EdgeAdjacency&
   Points current = faces.normals, next(face_count, 3);
   const double inverse_two_sigma_squared = 1.0 / (2.0 * options.normal_sigma * options.normal_sigma);
   for (int iteration = 0; iteration < options.iterations; ++iteration) {
+    options.cancel.throw_if_requested("normal filtering");
     for (Eigen::Index f = 0; f < face_count; ++f) {
       const Vec3 n = current.row(f).transpose();
       Vec3 sum = faces.areas[f] * n;

@@ -21,6 +21,7 @@
 #include "planner/dmis_export.hpp"
 #include "planner/machine.hpp"
 #include "planner/measurement_plan.hpp"
+#include "planner/model_limits.hpp"
 #include "planner/plan_json.hpp"
 #include "planner/plate.hpp"
 #include "planner/registration.hpp"
@@ -81,7 +82,8 @@ void choose_tip(planner::MachineDescription& machine, Options& o) {
   machine.active_tip = tip.id;
 }
 
-geometry::TriangleMesh read_mesh(const std::string& path, planner::PlanInputs& inputs) {
+geometry::TriangleMesh read_mesh(const std::string& path, const planner::MachineDescription& machine,
+                                 planner::PlanInputs& inputs) {
   geometry::ReadResult read = geometry::read_model(path);
   if (const auto* cloud = std::get_if<geometry::PointCloud>(&read.model))
     throw std::invalid_argument(path + " holds a point cloud (" + std::to_string(cloud->points.rows()) +
@@ -96,6 +98,7 @@ geometry::TriangleMesh read_mesh(const std::string& path, planner::PlanInputs& i
     message << path << ": --scale " << inputs.scale << " takes coordinates beyond the range of a double";
     throw std::invalid_argument(message.str());
   }
+  planner::check_model_limits(mesh, machine.travel_box, path + " (scale " + format_mm(inputs.scale) + ")");
   inputs.model_file = path;
   inputs.read_report = read.report;
   inputs.vertex_count = static_cast<std::size_t>(mesh.vertices.rows());
@@ -183,12 +186,12 @@ void print_summary(const Options& o, const StageTimes& times, const geometry::Fe
 int plan(Options o) {
   planner::PlanInputs& inputs = o.inputs;
   StageTimes times;
-  const geometry::TriangleMesh mesh = read_mesh(o.model, inputs);
-  times.done("read");
   planner::MachineDescription machine =
       o.machine.empty() ? planner::default_machine() : planner::read_machine(o.machine);
   if (o.machine.empty()) inputs.notes.push_back("no --machine given: the default machine description (config/machine.json)");
   choose_tip(machine, o);
+  const geometry::TriangleMesh mesh = read_mesh(o.model, machine, inputs);
+  times.done("read");
 
   std::optional<planner::RegistrationResult> registration;
   Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
@@ -205,6 +208,7 @@ int plan(Options o) {
   geometry::FeatureModelOptions feature_options;
   feature_options.spacing = inputs.spacing;
   feature_options.features.angle_deg = inputs.feature_angle_deg;
+  feature_options.max_points = planner::ModelLimits{}.max_edge_points;
   const geometry::FeatureModel model = geometry::extract_features(mesh, feature_options);
   times.done("features");
 
@@ -270,6 +274,9 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const std::invalid_argument& error) {  // an input the planner cannot use, named by the message
     std::cerr << "cmm-plan: " << error.what() << '\n';
+    return 2;
+  } catch (const geometry::TooManyPoints& error) {
+    std::cerr << "cmm-plan: " << o.model << ": " << error.what() << '\n';
     return 2;
   } catch (const WriteError& error) {
     std::cerr << "cmm-plan: " << error.what() << '\n';

@@ -7,8 +7,26 @@
 
 namespace cmm::planner {
 
+// "corners[1].scan.y" → "/corners/1/scan/1". The readers name a vector's elements x, y, z and no
+// key of theirs is x, y or z or holds '.', '[', '~' or '/', so this mapping is exact for them.
+std::string json_pointer(const std::string& field) {
+  std::string pointer;
+  std::string part;
+  auto flush = [&] {
+    if (part == "x" || part == "y" || part == "z") part = std::to_string(part[0] - 'x');
+    pointer += "/" + part;
+    part.clear();
+  };
+  for (const char c : field) {
+    if (c == '.' || c == '[') flush();
+    else if (c != ']') part += c;
+  }
+  if (!field.empty()) flush();
+  return pointer;
+}
+
 void fail_field(const std::string& source, const std::string& field, const std::string& message) {
-  throw geometry::FileError::whole(source, field + ": " + message);
+  throw geometry::FileError::at_field(source, field, json_pointer(field), message);
 }
 
 double number(const nlohmann::json& j, const std::string& source, const std::string& field) {

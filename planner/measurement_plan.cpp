@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <exception>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -23,19 +25,32 @@ geometry::TriangleMesh in_machine_frame(const geometry::TriangleMesh& mesh, cons
   return moved;
 }
 
-// Runs body(i) for i in [0, n) on a few threads; each index is independent.
+// Runs body(i) for i in [0, n) on a few threads; each index is independent. A cancel, or an
+// exception in any thread (which would otherwise end the process), stops every thread at its next
+// block of indices and is thrown here, on the caller's thread.
 template <typename Body>
-void parallel_for(std::size_t n, int threads, Body body) {
+void parallel_for(std::size_t n, int threads, const geometry::CancelCheck& cancel, const char* what, Body body) {
   const unsigned count = std::max(1u, threads > 0 ? static_cast<unsigned>(threads) : std::thread::hardware_concurrency());
   std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
   auto worker = [&] {
-    for (std::size_t i; (i = next.fetch_add(64)) < n;)
-      for (std::size_t k = i; k < std::min(n, i + 64); ++k) body(k);
+    try {
+      for (std::size_t i; !failed && !cancel.stop_requested() && (i = next.fetch_add(64)) < n;)
+        for (std::size_t k = i; k < std::min(n, i + 64); ++k) body(k);
+    } catch (...) {
+      const std::lock_guard lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+      failed = true;
+    }
   };
   std::vector<std::thread> pool;
   for (unsigned t = 1; t < count && n > 64; ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  cancel.throw_if_requested(what);
 }
 
 std::string mm(double value) { return fixed(value, 3); }
@@ -60,14 +75,15 @@ MeasurementPlan plan_measurement(const geometry::FeatureModel& model, const geom
                          mm(plan.clearance_z) + " mm, above the part's top and the ball");
   plan.notes.push_back("the table or plate top is taken at the part's lowest point, z " + mm(plan.floor_z) + " mm in M");
 
+  options.cancel.throw_if_requested("the reference mesh in M");
   const geometry::BallSweeper sweeper(mesh_m);
   const StylusClearance clearance(sweeper, plan.floor_z - 1e-6, machine, radius, plan.clearance_z, options.touch.delta);
   plan.edges.resize(model.points.size());
-  parallel_for(model.points.size(), options.threads, [&](std::size_t i) {
+  parallel_for(model.points.size(), options.threads, options.cancel, "the edge points' touches", [&](std::size_t i) {
     plan.edges[i] = plan_edge_point(model.points[i], T_M_S, clearance, options.touch);
   });
   plan.bores.resize(model.holes.size());
-  parallel_for(model.holes.size(), options.threads, [&](std::size_t i) {
+  parallel_for(model.holes.size(), options.threads, options.cancel, "the bores' touches", [&](std::size_t i) {
     plan.bores[i] = plan_bore(model.holes[i], T_M_S, clearance, options.touch);
   });
 
@@ -83,6 +99,7 @@ MeasurementPlan plan_measurement(const geometry::FeatureModel& model, const geom
       t.id = static_cast<int>(touches.size());
       touches.push_back(t);
     }
+  options.cancel.throw_if_requested("the touches");
   const Vec3 home(machine.travel_box.min.x(), machine.travel_box.min.y(), plan.clearance_z);
   plan.program = build_program(std::move(touches), machine, home, plan.clearance_z);
   return plan;

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "geometry/cancellation.hpp"
 #include "geometry/feature_model.hpp"
 #include "planner/machine.hpp"
 #include "planner/move_program.hpp"
@@ -27,6 +28,7 @@ struct MeasurementPlanOptions {
   TouchPlanOptions touch;
   double clearance_gap_mm = 5;  // the travel plane is at least this far above the part's top and the ball
   int threads = 0;              // 0: one per hardware thread
+  geometry::CancelCheck cancel;  // polled between edge points; plan_measurement then throws geometry::Cancelled
 };
 
 // `mesh` is the reference mesh in S, the one the model was extracted from.

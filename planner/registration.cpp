@@ -281,7 +281,11 @@ RegistrationInput registration_from_json(const json& j, const std::string& sourc
       if (file.is_relative()) file = base_dir / file;
       input.plate = read_plate(file);
     } else if (p.is_object()) {
-      input.plate = plate_from_json(p, source + ": plate");
+      try {
+        input.plate = plate_from_json(p, source + ": plate");
+      } catch (const FileError& e) {
+        throw FileError::nested(e, "/plate");
+      }
     } else {
       fail(source, "plate", "expected a path to plate.json or an inline plate object");
     }

@@ -314,6 +314,32 @@ TEST_F(CmmPlan, ScaleBeyondDoubleRangeIsRefused) {
   EXPECT_FALSE(fs::exists(path("plan.json")));
 }
 
+// Models no machine could hold are refused before any feature is looked for, naming the vertex
+// that is off; they once made cmm-plan allocate 12 GB in a minute (issue 13, D2).
+TEST_F(CmmPlan, AModelBeyondTheTravelBoxIsRefusedBeforePlanning) {
+  CommandResult r = plan(CMMD_TEST_DATA_DIR "/hostile/stray_vertex_cube.stl", path("plan.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("the farthest vertex is"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("(2600000.000, 40.000, 40.000)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("travel box"), std::string::npos) << r.output;
+  r = plan(CMMD_TEST_DATA_DIR "/hostile/huge_tetrahedron.ply", path("plan.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("1000000000.0 × 1000000000.0 × 1000000000.0 mm"), std::string::npos) << r.output;
+  // The sample part is fine at scale 1 and refused at 100 (88 m long).
+  r = plan(CMMD_SOURCE_DIR "/config/samples/case3_block.ply", path("plan.json"), "--scale 100");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("(scale 100)"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("plan.json")));
+}
+
+TEST_F(CmmPlan, ASpacingThatWouldGiveTooManyPointsIsRefused) {
+  const CommandResult r = plan(CMMD_SOURCE_DIR "/config/samples/case3_block.ply", path("plan.json"), "--spacing 0.01");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("more than the limit of 20000"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("coarser spacing"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("plan.json")));
+}
+
 TEST_F(CmmPlan, UnwritableOutputFailsAndLeavesNothing) {
   const std::string output = path("missing-folder/plan.json");
   const CommandResult r = plan(CMMD_SOURCE_DIR "/config/samples/case3_block.ply", output);
