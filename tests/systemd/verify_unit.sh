@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the build with DESTDIR into a temporary root and checks what landed there: every file,
-# `systemd-analyze verify` silent on the unit, systemd-sysusers making the cmmd user, the unit's
+# `systemd-analyze verify` silent on the unit, a MemoryMax= set, systemd-sysusers making the cmmd user, the unit's
 # `systemd-analyze security` exposure at or under the ceiling with no item failed but the accepted
 # ones, and a reinstall keeping the config. Needs no running systemd.
 # Usage: verify_unit.sh CMAKE BUILD_DIR UNIT SYSUSERS_CONF [OTHER_INSTALLED_FILE...]
@@ -31,6 +31,8 @@ for f in "$unit" "$sysusers" "$exec_start" "$config" "$@"; do
   [ -e "$root$f" ] || fail "cmake --install did not install $f (looked in $root$f)"
 done
 [ -x "$root$exec_start" ] || fail "$exec_start is not executable"
+# A runaway must hit cmmd's own memory cap, never the host's (docs/systemd.md, Memory).
+grep -Eq '^MemoryMax=[0-9]+[KMGT]?$' "$root$unit" || fail "$unit sets no MemoryMax= (docs/systemd.md, Memory)"
 
 # verify --root resolves every path inside the root, so the root gets what a real system has:
 # the targets a service's default dependencies name, and the system programs (kill) the unit
