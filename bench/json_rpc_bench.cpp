@@ -41,7 +41,7 @@ struct RpcRig {
   std::thread thread;
   RpcRig() {
     spdlog::set_level(spdlog::level::warn);  // no line per connection
-    dispatcher.add("echo", {Role::observer, false, [](const json& p, RpcContext&) { return p; }});
+    dispatcher.add("echo", {Role::observer, Work::quick, [](const json& p, RpcContext&) { return p; }});
     ServerOptions options;
     options.tcp_port = 0;
     server.emplace(io, dispatcher, options);

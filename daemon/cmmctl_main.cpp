@@ -54,6 +54,18 @@ json read_json_file(const std::string& file) {
   }
 }
 
+// A corners or measure_plate file as the job request carries it: cmmd cannot read the client's
+// files, so a "plate" that names one (relative to the file naming it) is sent inline.
+json registration_file(const std::string& file) {
+  json j = read_json_file(file);
+  if (j.is_object() && j.contains("plate") && j["plate"].is_string()) {
+    std::filesystem::path plate = j["plate"].get<std::string>();
+    if (plate.is_relative()) plate = std::filesystem::path(file).parent_path() / plate;
+    j["plate"] = read_json_file(plate.string());
+  }
+  return j;
+}
+
 std::string fmt(const char* format, double value) {
   char text[64];
   std::snprintf(text, sizeof text, format, value);
@@ -136,8 +148,8 @@ json job_request(const std::string& model, const CLI::App& submit, double scale,
   if (submit.count("--spacing")) r["spacing_mm"] = spacing;
   if (submit.count("--feature-angle")) r["feature_angle_deg"] = angle;
   if (!name.empty()) r["name"] = name;
-  if (!corners.empty()) r["registration"] = read_json_file(corners);
-  else if (!measure.empty()) r["registration"] = {{"measure_plate", read_json_file(measure)}};
+  if (!corners.empty()) r["registration"] = registration_file(corners);
+  else if (!measure.empty()) r["registration"] = {{"measure_plate", registration_file(measure)}};
   return r;
 }
 

@@ -38,10 +38,21 @@ void read_server(hal::ConfigBlock& b, DaemonConfig& c) {
     b.problem("unix_mode", "must be an octal mode such as \"0660\"");
   }
   s.max_request_bytes = static_cast<std::size_t>(b.number("max_request_bytes", static_cast<double>(s.max_request_bytes), 1024, 1 << 30));
+  s.max_batch_entries = static_cast<std::size_t>(b.integer("max_batch_entries", static_cast<int>(s.max_batch_entries), 1, 100000));
   s.max_connections = b.integer("max_connections", s.max_connections, 1, 100000);
+  s.max_unix_connections = b.integer("max_unix_connections", s.max_unix_connections, 1, 100000);
   s.max_pending_requests = b.integer("max_pending_requests", s.max_pending_requests, 1, 100000);
   s.idle_timeout_s = b.number("idle_timeout_s", s.idle_timeout_s, 0.01, 86400);
-  s.worker_threads = b.integer("worker_threads", s.worker_threads, 1, 64);
+  s.auth_timeout_s = b.number("auth_timeout_s", s.auth_timeout_s, 0.01, 86400);
+  s.max_unsent_bytes = static_cast<std::size_t>(b.number("max_unsent_bytes", static_cast<double>(s.max_unsent_bytes), 1 << 16, 1ull << 34));
+  s.max_total_unsent_bytes = static_cast<std::size_t>(
+      b.number("max_total_unsent_bytes", static_cast<double>(s.max_total_unsent_bytes), 1 << 16, 1ull << 36));
+  if (s.max_total_unsent_bytes < s.max_unsent_bytes)
+    b.problem("max_total_unsent_bytes", "must be at least max_unsent_bytes");
+  s.workers.operator_threads = b.integer("worker_threads", s.workers.operator_threads, 1, 64);
+  s.workers.observer_threads = b.integer("observer_threads", s.workers.observer_threads, 1, 64);
+  s.workers.planning_threads = b.integer("planning_threads", s.workers.planning_threads, 1, 64);
+  s.workers.max_queued_planning = b.integer("max_queued_planning", s.workers.max_queued_planning, 0, 10000);
   s.tokens.clear();
   for (hal::ConfigBlock token : b.objects("tokens")) {
     AccessToken t;
@@ -134,12 +145,9 @@ DaemonConfig read_daemon_config(const std::filesystem::path& file) {
 
 std::vector<std::string> changes_needing_restart(const DaemonConfig& running, const DaemonConfig& next) {
   std::vector<std::string> changed;
-  const ServerOptions &a = running.server, &b = next.server;
-  if (a.tcp_bind != b.tcp_bind || a.tcp_port != b.tcp_port || a.tcp_enabled != b.tcp_enabled ||
-      a.unix_path != b.unix_path || a.unix_mode != b.unix_mode || a.max_request_bytes != b.max_request_bytes ||
-      a.max_connections != b.max_connections || a.max_pending_requests != b.max_pending_requests ||
-      a.idle_timeout_s != b.idle_timeout_s || a.worker_threads != b.worker_threads)
-    changed.push_back("server (other than tokens)");
+  ServerOptions a = running.server, b = next.server;
+  a.tokens.clear(), b.tokens.clear();
+  if (a != b) changed.push_back("server (other than tokens)");
   if (running.job.delta_mm != next.job.delta_mm || running.job.spacing_mm != next.job.spacing_mm ||
       running.job.feature_angle_deg != next.job.feature_angle_deg ||
       running.job.trigger_sigma_mm != next.job.trigger_sigma_mm)

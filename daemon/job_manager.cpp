@@ -30,6 +30,16 @@ nlohmann::json normalized(nlohmann::json params, const JobRequest& r) {
   return params;
 }
 
+std::string describe_current_exception() {
+  try {
+    throw;
+  } catch (const std::exception& e) {
+    return std::string("internal error: ") + e.what();
+  } catch (...) {
+    return "internal error of an unknown kind";
+  }
+}
+
 }  // namespace
 
 JobManager::JobManager(const DaemonConfig& config, MachineLink& machine, ModelStore& models, JobStore& store,
@@ -161,7 +171,20 @@ void JobManager::worker() {
                                                  head->record.id, *head->request, head->control, sink_for(*head));
     running_ = head->record.id;
     lock.unlock();
-    head->runner->run(rehome, reregister);
+    try {
+      head->runner->run(rehome, reregister);
+    } catch (...) {
+      // run() reports every outcome as a state; this is the last line, should reporting itself fail
+      // (out of memory): the job fails, cmmd and the jobs behind it go on.
+      const std::string why = describe_current_exception();
+      spdlog::error("job {}: {}", head->record.id, why);
+      try {
+        const std::lock_guard relock(mutex_);
+        set_state(*head, JobState::failed, why, JobFault{"Internal", why});
+      } catch (...) {
+        spdlog::critical("job {}: cannot even record that it failed", head->record.id);
+      }
+    }
     lease.reset();
     lock.lock();
     running_.reset();

@@ -1,15 +1,18 @@
 #include "daemon/job_planning.hpp"
 
 #include <cmath>
+#include <sstream>
 #include <variant>
 
 #include "daemon/rpc_error.hpp"
 #include "geometry/file_error.hpp"
 #include "geometry/mesh_io.hpp"
+#include "planner/model_limits.hpp"
 
 namespace cmm::daemon {
 
-ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request) {
+ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
+                                    const planner::AxisBox& travel_box, const geometry::CancelCheck& cancel) {
   ReferenceModel m;
   geometry::ReadResult read;
   try {
@@ -29,6 +32,14 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const Job
   if (!m.mesh.vertices.allFinite())
     throw RpcError(rpc_code::model_error, file.string() + ": scale takes coordinates beyond a double's range",
                    {{"file", file.string()}});
+  const planner::ModelLimits limits;
+  try {
+    std::ostringstream source;
+    source << file.string() << " (scale " << request.scale << ")";
+    planner::check_model_limits(m.mesh, travel_box, source.str(), limits);
+  } catch (const planner::ModelRefused& e) {
+    throw RpcError(rpc_code::model_error, e.what(), {{"file", file.string()}, {"kind", "too_large"}});
+  }
   m.inputs.model_file = file;
   m.inputs.scale = request.scale;
   m.inputs.spacing = request.spacing_mm;
@@ -41,8 +52,15 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const Job
   geometry::FeatureModelOptions options;
   options.spacing = request.spacing_mm;
   options.features.angle_deg = request.feature_angle_deg;
+  options.max_points = limits.max_edge_points;
+  options.cancel = cancel;
   try {
     m.features = geometry::extract_features(m.mesh, options);
+  } catch (const geometry::Cancelled&) {
+    throw;
+  } catch (const geometry::TooManyPoints& e) {
+    throw RpcError(rpc_code::model_error, file.string() + ": " + e.what(),
+                   {{"file", file.string()}, {"kind", "too_many_points"}, {"points", e.points}, {"limit", e.limit}});
   } catch (const std::exception& e) {
     throw RpcError(rpc_code::model_error, file.string() + ": " + e.what(), {{"file", file.string()}});
   }
@@ -69,12 +87,16 @@ planner::MachineDescription machine_for_job(const planner::MachineDescription& c
 }
 
 planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
-                                  const planner::MachineDescription& machine, const JobRequest& request) {
+                                  const planner::MachineDescription& machine, const JobRequest& request,
+                                  const geometry::CancelCheck& cancel) {
   planner::MeasurementPlanOptions options;
   options.touch.radius = machine.tip().ball_radius_mm;
   options.touch.delta = request.delta_mm;
+  options.cancel = cancel;
   try {
     return planner::plan_measurement(model.features, model.mesh, T_M_S, machine, options);
+  } catch (const geometry::Cancelled&) {
+    throw;
   } catch (const std::exception& e) {
     throw RpcError(rpc_code::planning_error, std::string("cannot plan the job: ") + e.what());
   }

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "daemon/job_request.hpp"
+#include "geometry/cancellation.hpp"
 #include "geometry/feature_model.hpp"
 #include "hal/machine_info.hpp"
 #include "planner/machine.hpp"
@@ -23,17 +24,21 @@ struct ReferenceModel {
 };
 
 // Throws RpcError model_error naming the file (and line, when the reader knows it) for a mesh that
-// cannot be read, a point cloud, or a mesh with nothing left after cleaning.
-ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request);
+// cannot be read, a point cloud, a mesh with nothing left after cleaning, or one that
+// planner::check_model_limits refuses for `travel_box` (before its features are looked for);
+// geometry::Cancelled when `cancel` asks.
+ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
+                                    const planner::AxisBox& travel_box, const geometry::CancelCheck& cancel = {});
 
 // The description the plan is made for: the configured one, with the machine's active tip and its
 // qualified radius (a job uses the active tip's qualified radius, DESIGN.md), and the travel box
 // cut down to the machine's own where that is smaller.
 planner::MachineDescription machine_for_job(const planner::MachineDescription& configured, const hal::MachineInfo& info);
 
-// Throws RpcError planning_error when the plan cannot be made.
+// Throws RpcError planning_error when the plan cannot be made; geometry::Cancelled when `cancel` asks.
 planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
-                                  const planner::MachineDescription& machine, const JobRequest& request);
+                                  const planner::MachineDescription& machine, const JobRequest& request,
+                                  const geometry::CancelCheck& cancel = {});
 
 // T_M_S as the plan JSON writes it (4×4, row-major nested arrays) and back.
 nlohmann::json transform_json(const Eigen::Isometry3d& T);

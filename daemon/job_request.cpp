@@ -5,6 +5,7 @@
 #include <set>
 
 #include "daemon/rpc_error.hpp"
+#include "geometry/file_error.hpp"
 
 namespace cmm::daemon {
 
@@ -89,7 +90,9 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
     if (!params["name"].is_string()) throw_invalid_param("/name", "must be a string");
     r.name = params["name"].get<std::string>();
   }
-  r.scale = number(params, "scale", 1, 1e-6, 1e6);
+  // A unit conversion (µm, inch, m to mm) lies well inside; the model's size against the travel
+  // box is checked when it is loaded, before any work that grows with it.
+  r.scale = number(params, "scale", 1, 1e-4, 1e4);
   r.delta_mm = number(params, "delta_mm", config.job.delta_mm, 0.001, 10);
   r.spacing_mm = number(params, "spacing_mm", config.job.spacing_mm, 0.05, 100);
   r.feature_angle_deg = number(params, "feature_angle_deg", config.job.feature_angle_deg, 1, 179);
@@ -102,18 +105,19 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   const nlohmann::json& reg = params["registration"];
   if (reg.contains("measure_plate") == reg.contains("corners"))
     throw_invalid_param("/registration", "needs exactly one of \"corners\" and \"measure_plate\"");
-  try {
-    const nlohmann::json* plate = reg.contains("measure_plate") && reg["measure_plate"].is_object() &&
-                                          reg["measure_plate"].contains("plate")
-                                      ? &reg["measure_plate"]["plate"]
-                                      : reg.contains("plate") ? &reg["plate"] : nullptr;
-    if (plate != nullptr) {
-      if (!plate->is_object()) throw_invalid_param("/registration/plate", "must be a plate object (docs/registration.md)");
-      r.plate = planner::plate_from_json(*plate, "job request /registration/plate");
+  const bool measured = reg.contains("measure_plate") && reg["measure_plate"].is_object() &&
+                        reg["measure_plate"].contains("plate");
+  const nlohmann::json* plate = measured ? &reg["measure_plate"]["plate"] : reg.contains("plate") ? &reg["plate"] : nullptr;
+  const std::string plate_path = measured ? "/registration/measure_plate/plate" : "/registration/plate";
+  if (plate != nullptr) {
+    if (!plate->is_object()) throw_invalid_param(plate_path, "must be a plate object (docs/registration.md)");
+    try {
+      r.plate = planner::plate_from_json(*plate, "job request " + plate_path);
+    } catch (const geometry::FileError& e) {
+      throw_invalid_param(plate_path + e.json_pointer(), e.what());
+    } catch (const std::exception& e) {
+      throw_invalid_param(plate_path, e.what());
     }
-  } catch (const std::exception& e) {
-    if (dynamic_cast<const RpcError*>(&e)) throw;
-    throw_invalid_param("/registration/plate", e.what());
   }
   if (reg.contains("measure_plate")) {
     r.measure = plate_measurement(reg["measure_plate"], r.plate);
@@ -122,6 +126,8 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
       nlohmann::json given = reg;
       given["plate"] = planner::to_json(r.plate);
       r.given = planner::registration_from_json(given, "job request /registration");
+    } catch (const geometry::FileError& e) {
+      throw_invalid_param("/registration" + e.json_pointer(), e.what());
     } catch (const std::exception& e) {
       throw_invalid_param("/registration", e.what());
     }

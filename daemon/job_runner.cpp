@@ -201,7 +201,10 @@ void JobRunner::run(bool rehome, bool reregister) {
   const std::string started = hal::utc_now();
   try {
     sink_.state(JobState::planning, "", std::nullopt);
-    const ReferenceModel model = load_reference_model(env_.models.resolve(request_.model), request_);
+    // Planning a large model takes a while: a cancel or a shutdown ends it at its next step.
+    const geometry::CancelCheck planning_cancel{[this] { return control_.cancel || control_.shutdown; }};
+    const ReferenceModel model = load_reference_model(env_.models.resolve(request_.model), request_,
+                                                      env_.config.description.travel_box, planning_cancel);
     check_control();
     prepare_machine(rehome);
     const double clock0_s = env_.machine.cmm().status().t_s;
@@ -219,7 +222,7 @@ void JobRunner::run(bool rehome, bool reregister) {
                                        " but the machine's active tip is " + info.active_tip +
                                        ": select it again, or resume with reregister"};
     check_control();
-    const planner::MeasurementPlan plan = plan_job(model, reg.T_M_S, machine, request_);
+    const planner::MeasurementPlan plan = plan_job(model, reg.T_M_S, machine, request_, planning_cancel);
     if (!env_.store.read_file(id_, "plan.json"))
       env_.store.write_file(id_, "plan.json",
                             planner::plan_json(model.features, model.inputs, &plan, &machine, reg.file["registration"])
@@ -283,6 +286,14 @@ void JobRunner::run(bool rehome, bool reregister) {
                                  .finished_utc = hal::utc_now()};
     const std::string summary = write_job_result(env_.store, id_, inputs);
     sink_.state(JobState::done, summary, std::nullopt);
+  } catch (const geometry::Cancelled&) {
+    // Planning heard the cancel or the shutdown: the same ending as a Held from check_control.
+    if (control_.shutdown) {
+      sink_.state(JobState::interrupted, "cmmd stopped during the job", std::nullopt);
+    } else {
+      finish_touch_safely(true);
+      sink_.state(JobState::cancelled, "cancelled by the operator", std::nullopt);
+    }
   } catch (const Held& held) {
     // A cancel ends the job, so its touch is left now; a stop or a shutdown means no more motion:
     // the recorded search line waits for the next mover.

@@ -50,6 +50,11 @@ bool RpcContext::subscribed(const std::string& topic) const {
   return topics_.count(topic) != 0;
 }
 
+bool RpcContext::subscribed_any() const {
+  std::lock_guard lock(topics_mutex_);
+  return !topics_.empty();
+}
+
 void RpcDispatcher::add(std::string method, MethodSpec spec) {
   if (!spec.handler) throw std::logic_error("JSON-RPC method \"" + method + "\" registered without a handler");
   const auto [it, added] = methods_.emplace(method, std::move(spec));
@@ -62,16 +67,18 @@ std::vector<std::string> RpcDispatcher::methods() const {
   return names;
 }
 
-bool RpcDispatcher::is_slow(const json& message) const {
-  const auto slow = [this](const json& request) {
-    if (!request.is_object()) return false;
+Work RpcDispatcher::work_of(const json& message) const {
+  const auto work = [this](const json& request) {
+    if (!request.is_object()) return Work::quick;
     const auto method = request.find("method");
-    if (method == request.end() || !method->is_string()) return false;
+    if (method == request.end() || !method->is_string()) return Work::quick;
     const auto it = methods_.find(method->get_ref<const std::string&>());
-    return it != methods_.end() && it->second.slow;
+    return it != methods_.end() ? it->second.work : Work::quick;
   };
-  if (message.is_array()) return std::any_of(message.begin(), message.end(), slow);
-  return slow(message);
+  if (!message.is_array()) return work(message);
+  Work heaviest = Work::quick;
+  for (const json& request : message) heaviest = std::max(heaviest, work(request));
+  return heaviest;
 }
 
 json RpcDispatcher::handle_one(const json& request, RpcContext& ctx, bool& reply) const {
@@ -172,9 +179,12 @@ std::string without_exception_prefix(std::string what) {
 
 }  // namespace
 
-json parse_message(std::string_view line, int max_depth) {
+json parse_message(std::string_view line, const ParseLimits& limits) {
   int depth = 0;
   bool in_string = false, escaped = false;
+  const std::size_t first = line.find_first_not_of(" \t\r\n");
+  const bool batch = first != std::string_view::npos && line[first] == '[';
+  std::size_t entries = 1;  // of a batch: its commas at depth 1, plus one
   for (std::size_t i = 0; i < line.size(); ++i) {
     const char c = line[i];
     if (in_string) {
@@ -184,11 +194,15 @@ json parse_message(std::string_view line, int max_depth) {
     } else if (c == '"') {
       in_string = true;
     } else if (c == '[' || c == '{') {
-      if (++depth > max_depth)
-        throw RpcError(rpc_code::parse_error, "parse error: nesting deeper than " + std::to_string(max_depth),
+      if (++depth > limits.max_depth)
+        throw RpcError(rpc_code::parse_error, "parse error: nesting deeper than " + std::to_string(limits.max_depth),
                        {{"byte", i + 1}});
     } else if (c == ']' || c == '}') {
       --depth;
+    } else if (c == ',' && batch && depth == 1 && ++entries > limits.max_batch_entries) {
+      throw RpcError(rpc_code::batch_too_large,
+                     "a batch of more than max_batch_entries (" + std::to_string(limits.max_batch_entries) + ") requests",
+                     {{"max_batch_entries", limits.max_batch_entries}});
     }
   }
   try {

@@ -30,6 +30,15 @@ class RpcContext {
   const std::string& peer() const { return peer_; }  // e.g. "tcp://127.0.0.1:50412", for logs
   Role role() const { return role_.load(); }
   void set_role(Role role) { role_.store(role); }
+  // Set when the connection closes (its client left, or cmmd is stopping): a long handler still
+  // running for it stops, since nobody will read its answer.
+  bool closed() const { return closed_.load(); }
+  void mark_closed() { closed_.store(true); }
+  // A handler's word that the connection be closed once its reply is out (too many failed guesses).
+  void close_after_reply() { close_requested_.store(true); }
+  bool close_requested() const { return close_requested_.load(); }
+  int count_failed_auth() { return ++failed_auths_; }  // returns the count so far
+  bool subscribed_any() const;
 
   // Adds to the connection's topics; returns all of them, sorted.
   std::vector<std::string> subscribe(const std::vector<std::string>& topics);
@@ -39,6 +48,8 @@ class RpcContext {
   std::uint64_t connection_id_;
   std::string peer_;
   std::atomic<Role> role_;
+  std::atomic<bool> closed_{false}, close_requested_{false};
+  std::atomic<int> failed_auths_{0};
   mutable std::mutex topics_mutex_;
   std::set<std::string> topics_;
 };
@@ -47,9 +58,17 @@ class RpcContext {
 // std::exception becomes −32603 with its message.
 using Handler = std::function<nlohmann::json(const nlohmann::json& params, RpcContext& ctx)>;
 
+// Where the transport runs a method. Quick ones answer on the io thread; the others on worker
+// pools, so that previews (planning) can never take the workers the machine and jobs need.
+enum class Work {
+  quick,     // no waiting: on the io thread
+  blocking,  // waits for the machine or the disk: a worker of the caller's role
+  planning,  // plans a model (seconds of CPU): a planning worker
+};
+
 struct MethodSpec {
   Role role = Role::operator_;  // the least role that may call it
-  bool slow = false;            // true: the transport runs it off the io thread (it may block)
+  Work work = Work::quick;
   Handler handler;
 };
 
@@ -66,17 +85,26 @@ class RpcDispatcher {
   // The same from and to wire text: a line that is not JSON is answered with −32700.
   std::optional<std::string> handle_line(std::string_view line, RpcContext& ctx) const;
 
-  // Whether answering the message runs a slow method (then the whole message goes to a worker).
-  bool is_slow(const nlohmann::json& message) const;
+  // Where answering the message runs: its heaviest method's place (a batch goes whole).
+  Work work_of(const nlohmann::json& message) const;
 
  private:
   nlohmann::json handle_one(const nlohmann::json& request, RpcContext& ctx, bool& reply) const;
   std::map<std::string, MethodSpec, std::less<>> methods_;
 };
 
-// A received line as JSON; throws RpcError(parse_error) naming what is wrong (also for nesting
-// deeper than max_depth, which would otherwise cost the stack of whoever copies the value).
-nlohmann::json parse_message(std::string_view line, int max_depth = 128);
+// What a line may ask of the parser, checked on the text before a value is built: nesting deeper
+// than max_depth would cost the stack of whoever copies the value, and a batch is bounded so that
+// one line cannot become millions of replies.
+struct ParseLimits {
+  int max_depth = 128;
+  std::size_t max_batch_entries = 128;
+};
+
+// A received line as JSON; throws RpcError naming what is wrong: parse_error (with data.byte) for
+// text that is not JSON, a number beyond a double's range or nesting deeper than the limit;
+// batch_too_large (data.max_batch_entries) for a batch of more entries than the limit.
+nlohmann::json parse_message(std::string_view line, const ParseLimits& limits = {});
 // The error response {"jsonrpc": "2.0", "error": {code, message[, data]}, "id"}.
 nlohmann::json error_response(const nlohmann::json& id, const RpcError& error);
 // The reply to a message refused whole (e.g. over the pending limit): the error once for each

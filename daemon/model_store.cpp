@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cstring>
+#include <vector>
 
 #include "daemon/atomic_file.hpp"
 #include "daemon/base64.hpp"
@@ -84,19 +85,23 @@ ModelStore::ModelStore(fs::path state_models_dir, fs::path models_dir, std::uint
   fs::create_directories(partial_dir_);
 }
 
-fs::path ModelStore::stored_file(const std::string& sha256_hex) const {
-  for (const char* ext : mesh_extensions) {
-    const fs::path file = dir_ / (sha256_hex + ext);
-    if (fs::is_regular_file(file)) return file;
-  }
-  return {};
+fs::path ModelStore::stored_file(const std::string& sha256_hex, const std::string& extension) const {
+  const fs::path file = dir_ / (sha256_hex + extension);
+  return fs::is_regular_file(file) ? file : fs::path();
+}
+
+std::vector<std::string> ModelStore::stored_extensions(const std::string& sha256_hex) const {
+  std::vector<std::string> found;
+  for (const char* ext : mesh_extensions)
+    if (!stored_file(sha256_hex, ext).empty()) found.push_back(ext);
+  return found;
 }
 
 UploadStatus ModelStore::upload(const UploadChunk& chunk) {
   const std::string sha = lowercase(chunk.sha256_hex);
   if (!is_sha256_hex(sha)) throw bad_param("/sha256", "sha256 must be 64 hex digits, got \"" + chunk.sha256_hex + "\"");
   const std::string ext = mesh_extension(chunk.name);
-  const std::string model = "sha256:" + sha;
+  const std::string model = "sha256:" + sha + ext;
   if (chunk.size > max_model_bytes_)
     throw upload_failed("model of " + std::to_string(chunk.size) + " bytes is over the limit of " +
                             std::to_string(max_model_bytes_) + " bytes",
@@ -109,7 +114,14 @@ UploadStatus ModelStore::upload(const UploadChunk& chunk) {
   }
 
   std::lock_guard lock(mutex_);
-  if (!stored_file(sha).empty()) return {model, chunk.size, true};
+  if (!stored_file(sha, ext).empty()) return {model, chunk.size, true};
+  // The same bytes stored under another format's extension: the format is the client's word, so
+  // the bytes are kept under this one too (a hard link, no bytes sent again).
+  if (const std::vector<std::string> others = stored_extensions(sha); !others.empty()) {
+    fs::create_hard_link(stored_file(sha, others.front()), dir_ / (sha + ext));
+    sync_folder(dir_);
+    return {model, chunk.size, true};
+  }
   const fs::path part = partial_dir_ / (sha + ".part");
   const std::uint64_t received = size_or_zero(part);
   if (chunk.offset != 0 && chunk.offset != received)
@@ -143,17 +155,33 @@ UploadStatus ModelStore::finish(const std::string& sha, const std::string& ext, 
   fs::rename(part, file);
   sync_folder(dir_);
   sync_folder(partial_dir_);
-  return {"sha256:" + sha, size, true};
+  return {"sha256:" + sha + ext, size, true};
 }
 
 fs::path ModelStore::resolve(const std::string& ref) const {
   std::lock_guard lock(mutex_);
   if (ref.rfind("sha256:", 0) == 0) {
-    const std::string sha = lowercase(ref.substr(7));
+    // "sha256:<hex>.<ext>" names the format too; plain "sha256:<hex>" is fine while one is stored.
+    const std::string name = lowercase(ref.substr(7));
+    const std::string sha = name.substr(0, std::min<std::size_t>(64, name.size()));
+    const std::string ext = name.substr(sha.size());
     if (!is_sha256_hex(sha)) throw bad_param("/model", "\"" + ref + "\": sha256 must be 64 hex digits");
-    const fs::path file = stored_file(sha);
-    if (file.empty()) throw RpcError(rpc_code::not_found, "no uploaded model " + ref, {{"model", ref}});
-    return file;
+    if (!ext.empty()) {
+      if (std::find(mesh_extensions.begin(), mesh_extensions.end(), ext) == mesh_extensions.end())
+        throw bad_param("/model", "\"" + ref + "\": after the digest only .stl, .ply, .obj or .off may follow");
+      const fs::path file = stored_file(sha, ext);
+      if (file.empty()) throw RpcError(rpc_code::not_found, "no uploaded model " + ref, {{"model", ref}});
+      return file;
+    }
+    const std::vector<std::string> stored = stored_extensions(sha);
+    if (stored.empty()) throw RpcError(rpc_code::not_found, "no uploaded model " + ref, {{"model", ref}});
+    if (stored.size() > 1) {
+      std::string names;
+      for (const std::string& e : stored) names += (names.empty() ? "" : ", ") + ("sha256:" + sha + e);
+      throw bad_param("/model", "\"" + ref + "\" was uploaded as " + std::to_string(stored.size()) +
+                                    " formats: name one (" + names + ")");
+    }
+    return stored_file(sha, stored.front());
   }
   if (ref.rfind("file:", 0) == 0) return resolve_file(ref.substr(5));
   throw bad_param("/model", "\"" + ref + "\" is not a model reference (\"sha256:<hex>\" or \"file:<name>\")");

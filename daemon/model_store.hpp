@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <mutex>
 #include <string>
+#include <vector>
 
 namespace cmm::daemon {
 
@@ -20,7 +21,7 @@ struct UploadChunk {
 
 // model.upload's result.
 struct UploadStatus {
-  std::string model;  // "sha256:<hex>"
+  std::string model;  // "sha256:<hex><ext>": the content and the format it is read as
   std::uint64_t received = 0;
   bool complete = false;
 };
@@ -42,13 +43,16 @@ class ModelStore {
   // (data.path) for a bad name, digest or base64.
   UploadStatus upload(const UploadChunk& chunk);
 
-  // The file a job's "model" names: "sha256:<hex>" → the stored upload; "file:<name>" → a file
-  // under models_dir. Throws RpcError: invalid_params with data.path "/model" for a malformed ref,
-  // an absolute path, "..", or a name whose symlinks lead out of models_dir; not_found when absent.
+  // The file a job's "model" names: "sha256:<hex><ext>" → the upload in that format, "sha256:<hex>"
+  // → the upload if it is stored in one format only; "file:<name>" → a file under models_dir.
+  // Throws RpcError: invalid_params with data.path "/model" for a malformed ref, a digest stored in
+  // several formats without naming one, an absolute path, "..", or a name whose symlinks lead out
+  // of models_dir; not_found when absent.
   std::filesystem::path resolve(const std::string& ref) const;
 
  private:
-  std::filesystem::path stored_file(const std::string& sha256_hex) const;  // empty if not stored
+  std::filesystem::path stored_file(const std::string& sha256_hex, const std::string& extension) const;  // empty if not stored
+  std::vector<std::string> stored_extensions(const std::string& sha256_hex) const;
   std::filesystem::path resolve_file(const std::string& name) const;
   UploadStatus finish(const std::string& sha256_hex, const std::string& extension, std::uint64_t size);
 

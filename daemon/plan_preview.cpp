@@ -71,16 +71,16 @@ void recover(hal::Cmm& cmm) {
 }  // namespace
 
 nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& config, const ModelStore& models,
-                            const hal::MachineInfo* info) {
+                            const hal::MachineInfo* info, const geometry::CancelCheck& cancel) {
   const JobRequest request = parse_job_request(params, config, true);
   const std::filesystem::path model_file = models.resolve(request.model);
-  const ReferenceModel model = load_reference_model(model_file, request);
+  const ReferenceModel model = load_reference_model(model_file, request, config.description.travel_box, cancel);
   std::vector<std::string> notes;
   const Eigen::Isometry3d T_M_S = preview_registration(request, notes);
   const planner::MachineDescription machine =
       info ? machine_for_job(config.description, *info) : config.description;
   if (!info) notes.push_back("the machine could not be read: planned for the configured tip radii");
-  const planner::MeasurementPlan plan = plan_job(model, T_M_S, machine, request);
+  const planner::MeasurementPlan plan = plan_job(model, T_M_S, machine, request, cancel);
 
   sim::SimulatedCmm cmm;
   cmm.configure(sim_block(model_file, request, machine, model.mesh, T_M_S));
@@ -91,6 +91,7 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
   int contacts = 0, misses = 0, early = 0, out_of_travel = 0, other = 0;
   nlohmann::json problems = nlohmann::json::array();
   for (const planner::Touch& t : plan.program.touches) {
+    cancel.throw_if_requested("the dry run");
     try {
       const hal::TouchResult r = run_touch(cmm, t, plan.program.clearance_z, {0, machine.probe_speed_mm_s});
       (r.contact ? contacts : misses)++;

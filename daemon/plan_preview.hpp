@@ -6,14 +6,16 @@
 
 #include "daemon/daemon_config.hpp"
 #include "daemon/model_store.hpp"
+#include "geometry/cancellation.hpp"
 #include "hal/machine_info.hpp"
 
 namespace cmm::daemon {
 
 // `params` is a job request; its registration may be left out (T_M_S = identity, said in the notes)
 // and a measure_plate registration is previewed from its rough corners. `info` is the real
-// machine's, when it can be read (its tips' qualified radii), else null. Throws RpcError.
+// machine's, when it can be read (its tips' qualified radii), else null. Throws RpcError, and
+// geometry::Cancelled when `cancel` asks (its client gone, cmmd stopping) between steps or touches.
 nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& config, const ModelStore& models,
-                            const hal::MachineInfo* info);
+                            const hal::MachineInfo* info, const geometry::CancelCheck& cancel = {});
 
 }  // namespace cmm::daemon

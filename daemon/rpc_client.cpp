@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <deque>
+#include <limits>
 
 #include <asio/connect.hpp>
 #include <asio/generic/stream_protocol.hpp>
@@ -146,7 +147,7 @@ struct RpcClient::Connection {
 
   json parse(const std::string& line, const std::string& context) {
     try {
-      return parse_message(line);
+      return parse_message(line, {.max_depth = 128, .max_batch_entries = std::numeric_limits<std::size_t>::max()});
     } catch (const RpcError& e) {
       throw RpcClientError(endpoint + ": unreadable " + context + ": " + e.what());
     }

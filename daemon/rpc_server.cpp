@@ -51,13 +51,20 @@ void retry_accept_later(asio::io_context& io, const asio::error_code& ec, const 
   timer->async_wait([timer, retry](const asio::error_code&) { retry(); });
 }
 
+// A connection that guesses wrong this often is closed after the last answer.
+constexpr int kMaxFailedAuthPerConnection = 3;
+
 }  // namespace
 
 RpcServer::RpcServer(asio::io_context& io, RpcDispatcher& dispatcher, ServerOptions options)
-    : io_(io), dispatcher_(dispatcher), options_(std::move(options)), tokens_(options_.tokens) {
-  dispatcher_.add("server.auth", {Role::none, false, [this](const json& p, RpcContext& c) { return auth(p, c); }});
+    : io_(io),
+      dispatcher_(dispatcher),
+      options_(std::move(options)),
+      output_budget_(options_.max_total_unsent_bytes),
+      tokens_(options_.tokens) {
+  dispatcher_.add("server.auth", {Role::none, Work::quick, [this](const json& p, RpcContext& c) { return auth(p, c); }});
   dispatcher_.add("server.subscribe",
-                  {Role::observer, false, [this](const json& p, RpcContext& c) { return subscribe(p, c); }});
+                  {Role::observer, Work::quick, [this](const json& p, RpcContext& c) { return subscribe(p, c); }});
 }
 
 RpcServer::~RpcServer() { stop(); }
@@ -65,7 +72,7 @@ RpcServer::~RpcServer() { stop(); }
 void RpcServer::start() {
   if (started_) throw std::logic_error("RpcServer::start called twice");
   started_ = true;
-  workers_.emplace(static_cast<std::size_t>(std::max(1, options_.worker_threads)));
+  workers_.emplace(options_.workers);
   if (options_.tcp_enabled) listen_tcp();
   if (!options_.unix_path.empty()) listen_unix();
   if (tcp_acceptor_) accept_tcp();
@@ -150,7 +157,7 @@ void RpcServer::accept_tcp() {
       std::lock_guard lock(tokens_mutex_);
       role = tokens_.empty() ? Role::operator_ : Role::none;
     }
-    admit(std::move(socket), std::move(peer), role);
+    admit(std::move(socket), std::move(peer), role, true);
     accept_tcp();
   });
 }
@@ -161,31 +168,44 @@ void RpcServer::accept_unix() {
     if (alive.expired() || stopped_) return;
     if (ec) return retry_accept_later(io_, ec, "unix", [this, alive] { if (!alive.expired() && !stopped_) accept_unix(); });
     std::string peer = unix_peer(socket, options_.unix_path);
-    admit(std::move(socket), std::move(peer), Role::operator_);
+    admit(std::move(socket), std::move(peer), Role::operator_, false);
     accept_unix();
   });
 }
 
 template <typename Socket>
-void RpcServer::admit(Socket socket, std::string peer, Role role) {
+void RpcServer::admit(Socket socket, std::string peer, Role role, bool tcp) {
   const std::uint64_t id = next_id_++;
-  const SessionLimits limits{options_.max_request_bytes, static_cast<std::size_t>(std::max(0, options_.max_pending_requests)),
-                             options_.idle_timeout_s, options_.max_unsent_bytes};
-  auto session = std::make_shared<RpcSession>(RpcSession::Socket(std::move(socket)), id, std::move(peer), role, limits,
-                                              dispatcher_, *workers_, [this](std::uint64_t closed) {
-                                                std::lock_guard lock(sessions_mutex_);
-                                                sessions_.erase(closed);
-                                              });
+  const SessionLimits limits{.max_request_bytes = options_.max_request_bytes,
+                             .max_batch_entries = options_.max_batch_entries,
+                             .max_pending_requests = static_cast<std::size_t>(std::max(0, options_.max_pending_requests)),
+                             .idle_timeout_s = options_.idle_timeout_s,
+                             .auth_timeout_s = options_.auth_timeout_s,
+                             .max_unsent_bytes = options_.max_unsent_bytes,
+                             .tcp = tcp};
+  // Each transport counts its own connections: idle TCP clients cannot lock cmmctl out of the Unix socket.
+  const int allowed = tcp ? options_.max_connections : options_.max_unix_connections;
+  const char* limit_name = tcp ? "max_connections" : "max_unix_connections";
+  auto session = std::make_shared<RpcSession>(
+      RpcSession::Socket(std::move(socket)), id, std::move(peer), role, limits, dispatcher_, *workers_, output_budget_,
+      nullptr);
   bool over;
   {
     std::lock_guard lock(sessions_mutex_);
-    over = sessions_.size() >= static_cast<std::size_t>(std::max(0, options_.max_connections));
+    std::size_t& open = tcp ? tcp_sessions_ : unix_sessions_;
+    over = open >= static_cast<std::size_t>(std::max(0, allowed));
+    if (!over) ++open;
     sessions_.emplace(id, session);  // a refused one too, so that stop() closes it
   }
+  session->set_on_closed([this, tcp, counted = !over](std::uint64_t closed) {
+    std::lock_guard lock(sessions_mutex_);
+    sessions_.erase(closed);
+    if (counted) --(tcp ? tcp_sessions_ : unix_sessions_);
+  });
   if (over)
     session->refuse(RpcError(rpc_code::too_many_connections,
-                             "more than max_connections (" + std::to_string(options_.max_connections) + ") connections",
-                             {{"max_connections", options_.max_connections}}));
+                             std::string("more than ") + limit_name + " (" + std::to_string(allowed) + ") connections",
+                             {{limit_name, allowed}}));
   else
     session->start();
 }
@@ -224,10 +244,7 @@ void RpcServer::stop() {
     sessions.swap(sessions_);
   }
   for (const auto& [id, session] : sessions) session->close("cmmd is stopping");
-  if (workers_) {
-    workers_->stop();  // queued slow requests are dropped; running ones finish
-    workers_->join();
-  }
+  if (workers_) workers_->stop_and_join();  // queued slow requests are dropped; running ones finish
   if (started_) spdlog::info("JSON-RPC server stopped ({} connections closed)", sessions.size());
 }
 
@@ -238,11 +255,24 @@ json RpcServer::auth(const json& params, RpcContext& ctx) {
   std::optional<Role> granted;
   {
     std::lock_guard lock(tokens_mutex_);
+    if (!auth_throttle_.allow()) {
+      // Too many wrong guesses lately, from anyone: not even compared, and logged once.
+      if (!auth_refusing_) spdlog::warn("server.auth: too many failed attempts; refusing server.auth for a while");
+      auth_refusing_ = true;
+      ctx.close_after_reply();
+      throw RpcError(rpc_code::auth_failed, "too many failed server.auth attempts: try again later",
+                     {{"retry_after_s", auth_throttle_.retry_after_s()}});
+    }
+    auth_refusing_ = false;
     for (const AccessToken& known : tokens_)
       if (same_secret(known.token, token->get_ref<const std::string&>())) granted = known.role;
+    if (!granted) auth_throttle_.record_failure();
   }
   if (!granted) {
-    spdlog::warn("connection {} ({}): server.auth with an unknown token", ctx.connection_id(), ctx.peer());
+    const int failures = ctx.count_failed_auth();
+    spdlog::warn("connection {} ({}): server.auth with an unknown token ({} on this connection)", ctx.connection_id(),
+                 ctx.peer(), failures);
+    if (failures >= kMaxFailedAuthPerConnection) ctx.close_after_reply();
     throw RpcError(rpc_code::auth_failed, "unknown token");
   }
   if (*granted > ctx.role()) ctx.set_role(*granted);  // a token never lowers what the transport gave

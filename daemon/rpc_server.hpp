@@ -13,16 +13,19 @@
 #include <asio/io_context.hpp>
 #include <asio/ip/tcp.hpp>
 #include <asio/local/stream_protocol.hpp>
-#include <asio/thread_pool.hpp>
 #include <nlohmann/json.hpp>
 
+#include "daemon/auth_throttle.hpp"
 #include "daemon/json_rpc.hpp"
+#include "daemon/output_budget.hpp"
+#include "daemon/worker_pools.hpp"
 
 namespace cmm::daemon {
 
 struct AccessToken {
   std::string token;
   Role role = Role::observer;
+  bool operator==(const AccessToken&) const = default;
 };
 
 struct ServerOptions {
@@ -32,13 +35,20 @@ struct ServerOptions {
   std::string unix_path;                     // empty: no Unix socket
   unsigned unix_mode = 0660;
   std::size_t max_request_bytes = 4u << 20;  // one line, without its newline
-  int max_connections = 256;
+  std::size_t max_batch_entries = 128;       // requests in one batch; more: one batch_too_large error
+  int max_connections = 256;                 // TCP connections
+  int max_unix_connections = 64;             // Unix socket connections, counted apart: cmmctl stop always gets in
   int max_pending_requests = 64;             // slow requests running or queued, per connection
-  double idle_timeout_s = 30;                // a partial line then silence this long: closed
+  // A partial line then silence this long: closed. A TCP connection that has not subscribed is
+  // also closed when it sends no complete line for this long while it waits for no reply.
+  double idle_timeout_s = 30;
+  double auth_timeout_s = 10;                // with tokens: a TCP connection not authenticated by then is closed
   std::vector<AccessToken> tokens;           // empty: TCP is operator, and only loopback binds
-  int worker_threads = 4;                    // for slow methods
-  std::size_t max_unsent_bytes = 64u << 20;  // a subscriber further behind than this is dropped
+  WorkerCounts workers;                      // the threads of the slow methods
+  std::size_t max_unsent_bytes = 64u << 20;  // a connection further behind in reading than this is dropped
+  std::size_t max_total_unsent_bytes = 256u << 20;  // the same for all connections together
   std::vector<std::string> topics = {"job", "machine"};  // what server.subscribe accepts
+  bool operator==(const ServerOptions&) const = default;
 };
 
 class RpcSession;
@@ -67,6 +77,7 @@ class RpcServer {
   // connection, removes the Unix socket, and joins the workers (after running slow methods return).
   void stop();
   std::size_t connection_count() const;  // thread-safe
+  std::size_t unsent_bytes() const { return output_budget_.used(); }  // thread-safe: all connections' queues
 
  private:
   void listen_tcp();
@@ -74,7 +85,7 @@ class RpcServer {
   void accept_tcp();
   void accept_unix();
   template <typename Socket>
-  void admit(Socket socket, std::string peer, Role role);
+  void admit(Socket socket, std::string peer, Role role, bool tcp);
   nlohmann::json auth(const nlohmann::json& params, RpcContext& ctx);
   nlohmann::json subscribe(const nlohmann::json& params, RpcContext& ctx);
 
@@ -83,7 +94,8 @@ class RpcServer {
   const ServerOptions options_;
   std::optional<asio::ip::tcp::acceptor> tcp_acceptor_;
   std::optional<asio::local::stream_protocol::acceptor> unix_acceptor_;
-  std::optional<asio::thread_pool> workers_;
+  std::optional<WorkerPools> workers_;
+  OutputBudget output_budget_;
   int tcp_port_ = 0;
   bool started_ = false, stopped_ = false, unix_bound_ = false;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);  // accept handlers outliving us see it gone
@@ -91,8 +103,11 @@ class RpcServer {
 
   mutable std::mutex sessions_mutex_;
   std::map<std::uint64_t, std::shared_ptr<RpcSession>> sessions_;
+  std::size_t tcp_sessions_ = 0, unix_sessions_ = 0;  // admitted, not refused
   mutable std::mutex tokens_mutex_;
   std::vector<AccessToken> tokens_;
+  AuthThrottle auth_throttle_;  // under tokens_mutex_ (a batch may run server.auth on a worker)
+  bool auth_refusing_ = false;
 };
 
 }  // namespace cmm::daemon

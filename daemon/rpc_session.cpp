@@ -1,8 +1,9 @@
+// See rpc_session.hpp.
 #include "daemon/rpc_session.hpp"
 
 #include <spdlog/spdlog.h>
 
-#include <chrono>
+#include <cstdio>
 #include <utility>
 
 #include <asio/post.hpp>
@@ -12,27 +13,40 @@ namespace cmm::daemon {
 
 namespace {
 
+using Clock = std::chrono::steady_clock;
 constexpr std::size_t kLinesPerWrite = 64;
 const char kNewline = '\n';
 
-std::chrono::steady_clock::duration seconds(double s) {
-  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+std::string seconds_text(double s) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", s);
+  return text;
 }
 
 }  // namespace
 
 RpcSession::RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, SessionLimits limits,
-                       const RpcDispatcher& dispatcher, asio::thread_pool& workers, OnClosed on_closed)
+                       const RpcDispatcher& dispatcher, WorkerPools& workers, OutputBudget& budget, OnClosed on_closed)
     : socket_(std::move(socket)),
       context_(connection_id, std::move(peer), role),
       limits_(limits),
       dispatcher_(dispatcher),
       workers_(workers),
+      budget_(budget),
       on_closed_(std::move(on_closed)),
-      timer_(socket_.get_executor()) {}
+      timer_(socket_.get_executor()),
+      auth_timer_(socket_.get_executor()),
+      last_bytes_(Clock::now()),
+      last_line_(last_bytes_) {}
 
 void RpcSession::start() {
   spdlog::info("connection {} opened: {} (role {})", context_.connection_id(), context_.peer(), to_string(context_.role()));
+  arm_idle_timer();
+  arm_auth_timer();
   read();
 }
 
@@ -48,7 +62,7 @@ void RpcSession::read() {
 
 void RpcSession::on_read(const asio::error_code& ec, std::size_t n) {
   if (closed_) return;
-  if (closing_) {  // the error line is out; what the peer still sends is discarded until it closes
+  if (closing_) {  // the last line is out or going; what the peer still sends is discarded until it closes
     if (ec) return close(close_reason_);
     return read();
   }
@@ -60,6 +74,7 @@ void RpcSession::on_read(const asio::error_code& ec, std::size_t n) {
     timer_.cancel();
     return finish_if_done();
   }
+  last_bytes_ = Clock::now();
   inbox_.append(read_buffer_.data(), n);
   const RpcError too_large(rpc_code::request_too_large,
                            "request over max_request_bytes (" + std::to_string(limits_.max_request_bytes) + " bytes)",
@@ -70,8 +85,10 @@ void RpcSession::on_read(const asio::error_code& ec, std::size_t n) {
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     begin = end + 1;
     if (line.size() > limits_.max_request_bytes) return close_after_write(too_large);
+    last_line_ = last_bytes_;
     on_line(line);
     if (closed_ || closing_) return;
+    if (context_.close_requested()) return finish_after_output("closed after its reply, as a handler asked");
   }
   inbox_.erase(0, begin);
   scanned_ = inbox_.size();
@@ -91,12 +108,13 @@ void RpcSession::on_line(std::string_view line) {
   if (line.find_first_not_of(" \t") == std::string_view::npos) return;
   nlohmann::json message;
   try {
-    message = parse_message(line);
+    message = parse_message(line, {.max_depth = 128, .max_batch_entries = limits_.max_batch_entries});
   } catch (const RpcError& e) {
     spdlog::debug("connection {}: {}", context_.connection_id(), e.what());
     return reply(error_response(nullptr, e));
   }
-  if (!dispatcher_.is_slow(message)) return reply(dispatcher_.handle(message, context_));
+  const Work work = dispatcher_.work_of(message);
+  if (work == Work::quick) return reply(dispatcher_.handle(message, context_));
   const std::size_t count = message_size(message);
   if (pending_ + count > limits_.max_pending_requests) {
     spdlog::debug("connection {}: over max_pending_requests ({})", context_.connection_id(), limits_.max_pending_requests);
@@ -106,17 +124,29 @@ void RpcSession::on_line(std::string_view line) {
                               ") requests pending on this connection",
                           {{"max_pending_requests", limits_.max_pending_requests}})));
   }
-  run_slow(std::move(message), count);
+  if (work == Work::planning && !workers_.admit_planning(count)) {
+    spdlog::info("connection {} ({}): planning workers busy, a preview refused", context_.connection_id(), context_.peer());
+    return reply(refuse_message(
+        message, RpcError(rpc_code::server_busy, "every planning worker is busy and their queue is full: try again later",
+                          {{"retry", true}})));
+  }
+  run_slow(std::move(message), count, work);
 }
 
-void RpcSession::run_slow(nlohmann::json message, std::size_t count) {
+void RpcSession::run_slow(nlohmann::json message, std::size_t count, Work work) {
   pending_ += count;
-  asio::post(workers_, [self = shared_from_this(), message = std::move(message), count] {
+  asio::post(workers_.pool(work, context_.role()), [self = shared_from_this(), message = std::move(message), count, work] {
     std::optional<std::string> line;
-    if (const auto response = self->dispatcher_.handle(message, self->context_)) line = to_wire(*response);
+    try {
+      if (const auto response = self->dispatcher_.handle(message, self->context_)) line = to_wire(*response);
+    } catch (const std::exception& e) {  // building the reply failed (out of memory): the request gets no answer
+      spdlog::error("connection {}: a reply could not be made: {}", self->context_.connection_id(), e.what());
+    }
+    if (work == Work::planning) self->workers_.release_planning(count);
     asio::post(self->socket_.get_executor(), [self, line = std::move(line), count]() mutable {
       self->pending_ -= count;
       if (line && !self->closing_) self->queue(std::make_shared<const std::string>(std::move(*line)));
+      if (!self->closed_ && !self->closing_ && !self->read_paused_ && !self->peer_done_) self->arm_idle_timer();
       self->finish_if_done();
     });
   });
@@ -128,17 +158,20 @@ void RpcSession::reply(const std::optional<nlohmann::json>& response) {
 
 void RpcSession::send_notification(std::shared_ptr<const std::string> line) {
   if (closed_ || closing_) return;
-  if (unsent_bytes_ + line->size() + 1 > limits_.max_unsent_bytes) {
-    spdlog::warn("connection {} ({}) dropped: {} bytes unsent, over max_unsent_bytes ({}); a slow consumer of notifications",
-                 context_.connection_id(), context_.peer(), unsent_bytes_, limits_.max_unsent_bytes);
-    return close("a slow consumer of notifications");
-  }
   queue(std::move(line));
 }
 
 void RpcSession::queue(std::shared_ptr<const std::string> line) {
   if (closed_) return;
-  unsent_bytes_ += line->size() + 1;
+  const std::size_t bytes = line->size() + 1;
+  if (unsent_bytes_ + bytes > limits_.max_unsent_bytes || !budget_.take(bytes)) {
+    spdlog::warn("connection {} ({}) dropped: {} bytes unsent, over max_unsent_bytes ({}) or cmmd's budget for all "
+                 "connections; a client that does not read what it is sent",
+                 context_.connection_id(), context_.peer(), unsent_bytes_, limits_.max_unsent_bytes);
+    return close("a client that does not read what it is sent");
+  }
+  unsent_bytes_ += bytes;
+  last_line_ = Clock::now();
   outbox_.push_back(std::move(line));
   if (!writing_) write();
 }
@@ -160,10 +193,11 @@ void RpcSession::write() {
 
 void RpcSession::on_written(const asio::error_code& ec, std::size_t lines, std::size_t bytes) {
   writing_ = false;
-  if (closed_) return;
+  if (closed_) return;  // close() gave the unsent bytes back already
   if (ec) return close("write failed: " + ec.message());
   outbox_.erase(outbox_.begin(), outbox_.begin() + static_cast<std::ptrdiff_t>(lines));
   unsent_bytes_ -= bytes;
+  budget_.give(bytes);
   if (read_paused_ && !closing_ && unsent_bytes_ <= limits_.max_request_bytes) {
     read_paused_ = false;
     arm_idle_timer();
@@ -171,33 +205,66 @@ void RpcSession::on_written(const asio::error_code& ec, std::size_t lines, std::
   }
   if (!outbox_.empty()) return write();
   if (closing_) return drain();
+  if (!read_paused_ && !peer_done_) arm_idle_timer();
   finish_if_done();
 }
 
+// One timer for both idle rules (docs/api.md, Transport): a partial line followed by silence, and a
+// TCP connection that has not subscribed, waits for no reply, and sends no complete line.
 void RpcSession::arm_idle_timer() {
   const std::uint64_t generation = ++timer_generation_;
-  if (inbox_.empty()) {
+  const Clock::duration idle = seconds(limits_.idle_timeout_s);
+  const bool silent_rule = limits_.tcp && pending_ == 0 && outbox_.empty() && !context_.subscribed_any();
+  if (inbox_.empty() && !silent_rule) {
     timer_.cancel();
     return;
   }
-  timer_.expires_after(seconds(limits_.idle_timeout_s));
+  Clock::time_point deadline = Clock::time_point::max();
+  if (!inbox_.empty()) deadline = last_bytes_ + idle;
+  if (silent_rule) deadline = std::min(deadline, last_line_ + idle);
+  timer_.expires_at(deadline);
   timer_.async_wait([self = shared_from_this(), generation](const asio::error_code& ec) {
     if (ec || self->closed_ || generation != self->timer_generation_) return;
-    self->close("a partial request, then nothing for " + std::to_string(self->limits_.idle_timeout_s) + " s");
+    self->on_idle_timer();
+  });
+}
+
+void RpcSession::on_idle_timer() {
+  const Clock::time_point now = Clock::now();
+  const Clock::duration idle = seconds(limits_.idle_timeout_s);
+  if (!inbox_.empty() && now - last_bytes_ >= idle)
+    return close("a partial request, then nothing for " + seconds_text(limits_.idle_timeout_s) + " s");
+  if (limits_.tcp && pending_ == 0 && outbox_.empty() && !context_.subscribed_any() && now - last_line_ >= idle)
+    return close("no request for " + seconds_text(limits_.idle_timeout_s) + " s on a TCP connection that has not subscribed");
+  arm_idle_timer();
+}
+
+void RpcSession::arm_auth_timer() {
+  if (limits_.auth_timeout_s <= 0 || context_.role() != Role::none) return;
+  auth_timer_.expires_after(seconds(limits_.auth_timeout_s));
+  auth_timer_.async_wait([self = shared_from_this()](const asio::error_code& ec) {
+    if (ec || self->closed_ || self->context_.role() != Role::none) return;
+    self->close("not authenticated within auth_timeout_s (" + seconds_text(self->limits_.auth_timeout_s) + " s)");
   });
 }
 
 void RpcSession::close_after_write(const RpcError& error) {
+  reply(error_response(nullptr, error));
+  finish_after_output(error.what());
+}
+
+void RpcSession::finish_after_output(const std::string& reason) {
+  if (closed_) return;
   closing_ = true;
-  close_reason_ = error.what();
+  close_reason_ = reason;
   ++timer_generation_;
   timer_.cancel();
-  spdlog::debug("connection {}: {}; closing", context_.connection_id(), error.what());
-  reply(error_response(nullptr, error));
+  spdlog::debug("connection {}: {}; closing", context_.connection_id(), reason);
+  if (!writing_ && outbox_.empty()) drain();
 }
 
 void RpcSession::drain() {
-  // Closing with unread input would reset the connection and could destroy the error line in
+  // Closing with unread input would reset the connection and could destroy the last line in
   // flight, so: FIN first, then read and discard until the peer closes (or idle_timeout_s).
   asio::error_code ignored;
   socket_.shutdown(Socket::shutdown_send, ignored);
@@ -216,8 +283,12 @@ void RpcSession::finish_if_done() {
 void RpcSession::close(const std::string& reason) {
   if (closed_) return;
   closed_ = true;
+  context_.mark_closed();
   ++timer_generation_;
   timer_.cancel();
+  auth_timer_.cancel();
+  budget_.give(unsent_bytes_);  // the queue stays until a write in flight is done with it
+  unsent_bytes_ = 0;
   asio::error_code ignored;
   socket_.shutdown(Socket::shutdown_both, ignored);
   socket_.close(ignored);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -12,17 +13,21 @@
 
 #include <asio/generic/stream_protocol.hpp>
 #include <asio/steady_timer.hpp>
-#include <asio/thread_pool.hpp>
 
 #include "daemon/json_rpc.hpp"
+#include "daemon/output_budget.hpp"
+#include "daemon/worker_pools.hpp"
 
 namespace cmm::daemon {
 
 struct SessionLimits {
   std::size_t max_request_bytes;
+  std::size_t max_batch_entries;
   std::size_t max_pending_requests;
   double idle_timeout_s;
+  double auth_timeout_s;  // <= 0: no deadline to authenticate
   std::size_t max_unsent_bytes;
+  bool tcp;               // TCP (closed when silent and not subscribed) or the Unix socket
 };
 
 // Every member function runs on the io thread; workers only post back to it.
@@ -32,9 +37,10 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   using OnClosed = std::function<void(std::uint64_t connection_id)>;
 
   RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, SessionLimits limits,
-             const RpcDispatcher& dispatcher, asio::thread_pool& workers, OnClosed on_closed);
+             const RpcDispatcher& dispatcher, WorkerPools& workers, OutputBudget& budget, OnClosed on_closed);
 
   void start();
+  void set_on_closed(OnClosed on_closed) { on_closed_ = std::move(on_closed); }
   // Sends one error line and closes: the connection is over a server-wide limit.
   void refuse(const RpcError& error);
   void send_notification(std::shared_ptr<const std::string> line);
@@ -46,13 +52,16 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   void read();
   void on_read(const asio::error_code& ec, std::size_t n);
   void on_line(std::string_view line);
-  void run_slow(nlohmann::json message, std::size_t count);
+  void run_slow(nlohmann::json message, std::size_t count, Work work);
   void reply(const std::optional<nlohmann::json>& response);
   void queue(std::shared_ptr<const std::string> line);
   void write();
   void on_written(const asio::error_code& ec, std::size_t lines, std::size_t bytes);
   void arm_idle_timer();
+  void on_idle_timer();
+  void arm_auth_timer();
   void close_after_write(const RpcError& error);
+  void finish_after_output(const std::string& reason);
   void drain();
   void finish_if_done();
 
@@ -60,10 +69,14 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   RpcContext context_;
   SessionLimits limits_;
   const RpcDispatcher& dispatcher_;
-  asio::thread_pool& workers_;
+  WorkerPools& workers_;
+  OutputBudget& budget_;
   OnClosed on_closed_;
-  asio::steady_timer timer_;
+  asio::steady_timer timer_;       // idle, and the close's drain
+  asio::steady_timer auth_timer_;
   std::uint64_t timer_generation_ = 0;
+  std::chrono::steady_clock::time_point last_bytes_;  // anything read
+  std::chrono::steady_clock::time_point last_line_;   // a complete line read, or a reply queued
 
   std::array<char, 64 * 1024> read_buffer_;
   std::string inbox_;           // bytes of lines not yet complete

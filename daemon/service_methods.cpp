@@ -8,6 +8,7 @@
 
 #include "daemon/plan_preview.hpp"
 #include "daemon/touch_motion.hpp"
+#include "geometry/file_error.hpp"
 #include "hal/fault.hpp"
 #include "hal/qualification.hpp"
 #include "planner/registration.hpp"
@@ -66,12 +67,12 @@ nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
 nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 void add_machine_methods(RpcDispatcher& d, Service& s) {
-  d.add("machine.status", {Role::observer, true, [&s](const nlohmann::json&, RpcContext&) {
+  d.add("machine.status", {Role::observer, Work::blocking, [&s](const nlohmann::json&, RpcContext&) {
           nlohmann::json j = s.machine.status_json();
           if (const auto running = s.jobs.running_job()) j["job"] = *running;
           return j;
         }});
-  d.add("machine.home", {Role::operator_, true, [&s](const nlohmann::json&, RpcContext&) {
+  d.add("machine.home", {Role::operator_, Work::blocking, [&s](const nlohmann::json&, RpcContext&) {
           return with_machine(s, "machine.home", [&s](hal::Cmm& cmm, const std::function<void()>& check_stop) {
             check_stop();
             cmm.home();
@@ -80,7 +81,7 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
           });
         }});
   // stop and abort run on the io thread: they must never wait behind a slow method.
-  d.add("machine.stop", {Role::operator_, false, [&s](const nlohmann::json&, RpcContext& ctx) {
+  d.add("machine.stop", {Role::operator_, Work::quick, [&s](const nlohmann::json&, RpcContext& ctx) {
           spdlog::warn("machine.stop from {}", ctx.peer());
           s.machine.count_stop();
           s.jobs.machine_stopped();
@@ -93,7 +94,7 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
           }
           return nlohmann::json::object();
         }});
-  d.add("machine.abort", {Role::operator_, false, [&s](const nlohmann::json&, RpcContext& ctx) {
+  d.add("machine.abort", {Role::operator_, Work::quick, [&s](const nlohmann::json&, RpcContext& ctx) {
           spdlog::warn("machine.abort from {}", ctx.peer());
           s.machine.count_stop();
           s.jobs.machine_stopped();
@@ -105,20 +106,28 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
           }
           return nlohmann::json::object();
         }});
-  d.add("machine.reset", {Role::operator_, true, [&s](const nlohmann::json&, RpcContext&) {
+  d.add("machine.reset", {Role::operator_, Work::blocking, [&s](const nlohmann::json&, RpcContext&) {
           return with_machine(s, "machine.reset", [](hal::Cmm& cmm, const std::function<void()>&) {
             cmm.reset();
             return nlohmann::json::object();
           });
         }});
-  d.add("machine.qualify", {Role::operator_, true, [&s](const nlohmann::json& params, RpcContext&) {
+  d.add("machine.qualify", {Role::operator_, Work::blocking, [&s](const nlohmann::json& params, RpcContext&) {
           const std::string tip = text(params, "tip", "");
           return with_machine(s, "machine.qualify", [&](hal::Cmm& cmm, const std::function<void()>& check_stop) {
+            const hal::MachineInfo info = cmm.info();
+            const std::string id = tip.empty() ? info.active_tip : tip;
+            std::string known;
+            bool found = false;
+            for (const hal::TipInfo& t : info.tips) {
+              known += (known.empty() ? "" : ", ") + t.id;
+              found = found || t.id == id;
+            }
+            if (!found) throw_invalid_param("/tip", "the machine has no tip \"" + id + "\" (its tips: " + known + ")");
             if (!cmm.status().homed) {
               check_stop();
               cmm.home();
             }
-            const std::string id = tip.empty() ? cmm.info().active_tip : tip;
             hal::QualificationOptions options;
             options.before_motion = check_stop;
             const hal::TipQualification q = hal::qualify(cmm, id, options);
@@ -134,7 +143,7 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
 }
 
 void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
-  d.add("model.upload", {Role::operator_, true, [&s](const nlohmann::json& p, RpcContext&) {
+  d.add("model.upload", {Role::operator_, Work::blocking, [&s](const nlohmann::json& p, RpcContext&) {
           if (!p.is_object()) throw_invalid_param("", "must be an object");
           UploadChunk chunk;
           chunk.name = text(p, "name", "");
@@ -147,16 +156,23 @@ void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
           const UploadStatus st = s.models.upload(chunk);
           return nlohmann::json{{"model", st.model}, {"received", st.received}, {"complete", st.complete}};
         }});
-  d.add("plan.preview", {Role::observer, true, [&s](const nlohmann::json& p, RpcContext&) {
+  d.add("plan.preview", {Role::observer, Work::planning, [&s](const nlohmann::json& p, RpcContext& ctx) {
           std::optional<hal::MachineInfo> info;
           try {  // only read: an observer's preview never connects or enables the machine
             info = s.machine.cmm().info();
           } catch (const std::exception& e) {
             spdlog::info("plan.preview without the machine's tips: {}", e.what());
           }
-          return preview_plan(p, s.config, s.models, info ? &*info : nullptr);
+          // Its client gone (or cmmd stopping, which closes every connection): nobody reads the answer.
+          const geometry::CancelCheck cancel{[&ctx] { return ctx.closed(); }};
+          try {
+            return preview_plan(p, s.config, s.models, info ? &*info : nullptr, cancel);
+          } catch (const geometry::Cancelled& e) {
+            throw RpcError(rpc_code::shutting_down, std::string("plan.preview abandoned: its connection closed (") +
+                                                        e.what() + ")");
+          }
         }});
-  d.add("registration.fit", {Role::observer, true, [&s](const nlohmann::json& p, RpcContext&) {
+  d.add("registration.fit", {Role::observer, Work::blocking, [&s](const nlohmann::json& p, RpcContext&) {
           try {
             nlohmann::json input = p;
             if (!input.contains("plate")) input["plate"] = planner::to_json(s.config.plate);
@@ -167,18 +183,20 @@ void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
             throw RpcError(rpc_code::registration_error, e.what(), {{"corners", e.corners()}});
           } catch (const RpcError&) {
             throw;
+          } catch (const geometry::FileError& e) {  // a field of the params, named by its JSON Pointer
+            throw RpcError(rpc_code::invalid_params, e.what(), {{"path", e.json_pointer()}});
           } catch (const std::exception& e) {
-            throw RpcError(rpc_code::invalid_params, e.what());
+            throw RpcError(rpc_code::invalid_params, e.what(), {{"path", ""}});
           }
         }});
 }
 
 void add_job_methods(RpcDispatcher& d, Service& s) {
-  d.add("job.submit", {Role::operator_, true, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.submit(p); }});
-  d.add("job.get", {Role::observer, false, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.get(job_id(p)); }});
-  d.add("job.list", {Role::observer, false, [&s](const nlohmann::json&, RpcContext&) { return s.jobs.list(); }});
-  d.add("job.pause", {Role::operator_, false, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.pause(job_id(p)); }});
-  d.add("job.resume", {Role::operator_, false, [&s](const nlohmann::json& p, RpcContext&) {
+  d.add("job.submit", {Role::operator_, Work::blocking, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.submit(p); }});
+  d.add("job.get", {Role::observer, Work::quick, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.get(job_id(p)); }});
+  d.add("job.list", {Role::observer, Work::quick, [&s](const nlohmann::json&, RpcContext&) { return s.jobs.list(); }});
+  d.add("job.pause", {Role::operator_, Work::quick, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.pause(job_id(p)); }});
+  d.add("job.resume", {Role::operator_, Work::quick, [&s](const nlohmann::json& p, RpcContext&) {
           bool reregister = false;
           if (p.contains("reregister")) {
             if (!p["reregister"].is_boolean()) throw_invalid_param("/reregister", "must be true or false");
@@ -186,8 +204,8 @@ void add_job_methods(RpcDispatcher& d, Service& s) {
           }
           return s.jobs.resume(job_id(p), reregister);
         }});
-  d.add("job.cancel", {Role::operator_, false, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.cancel(job_id(p)); }});
-  d.add("job.result", {Role::observer, true, [&s](const nlohmann::json& p, RpcContext&) {
+  d.add("job.cancel", {Role::operator_, Work::quick, [&s](const nlohmann::json& p, RpcContext&) { return s.jobs.cancel(job_id(p)); }});
+  d.add("job.result", {Role::observer, Work::blocking, [&s](const nlohmann::json& p, RpcContext&) {
           return s.jobs.result(job_id(p), text(p, "format", "json"));
         }});
 }
@@ -195,7 +213,7 @@ void add_job_methods(RpcDispatcher& d, Service& s) {
 }  // namespace
 
 void add_service_methods(RpcDispatcher& dispatcher, Service& service) {
-  dispatcher.add("server.info", {Role::none, false, [&service, &dispatcher](const nlohmann::json&, RpcContext& ctx) {
+  dispatcher.add("server.info", {Role::none, Work::quick, [&service, &dispatcher](const nlohmann::json&, RpcContext& ctx) {
                    return nlohmann::json{{"name", "cmmd"},
                                          {"version", service.version},
                                          {"api", "cmmd.api/1"},

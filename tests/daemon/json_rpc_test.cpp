@@ -27,29 +27,30 @@ json without_error_text(json reply) {
 class DispatcherTest : public ::testing::Test {
  protected:
   DispatcherTest() {
-    dispatcher.add("subtract", {Role::observer, false, [](const json& p, RpcContext&) -> json {
+    dispatcher.add("subtract", {Role::observer, Work::quick, [](const json& p, RpcContext&) -> json {
                                   if (p.is_array()) return p.at(0).get<int>() - p.at(1).get<int>();
                                   return p.at("minuend").get<int>() - p.at("subtrahend").get<int>();
                                 }});
-    dispatcher.add("sum", {Role::observer, false, [](const json& p, RpcContext&) -> json {
+    dispatcher.add("sum", {Role::observer, Work::quick, [](const json& p, RpcContext&) -> json {
                              return std::accumulate(p.begin(), p.end(), 0, [](int a, const json& b) { return a + b.get<int>(); });
                            }});
-    dispatcher.add("update", {Role::observer, false, [this](const json& p, RpcContext&) -> json {
+    dispatcher.add("update", {Role::observer, Work::quick, [this](const json& p, RpcContext&) -> json {
                                 notified.push_back(p);
                                 return nullptr;
                               }});
-    dispatcher.add("notify_hello", {Role::observer, false, [this](const json& p, RpcContext&) -> json {
+    dispatcher.add("notify_hello", {Role::observer, Work::quick, [this](const json& p, RpcContext&) -> json {
                                       notified.push_back(p);
                                       return nullptr;
                                     }});
-    dispatcher.add("get_data", {Role::observer, false, [](const json&, RpcContext&) -> json { return {"hello", 5}; }});
-    dispatcher.add("echo", {Role::none, false, [](const json& p, RpcContext&) { return p; }});
-    dispatcher.add("machine.home", {Role::operator_, true, [](const json&, RpcContext&) -> json { return json::object(); }});
-    dispatcher.add("boom", {Role::observer, false, [this](const json&, RpcContext&) -> json {
+    dispatcher.add("get_data", {Role::observer, Work::quick, [](const json&, RpcContext&) -> json { return {"hello", 5}; }});
+    dispatcher.add("echo", {Role::none, Work::quick, [](const json& p, RpcContext&) { return p; }});
+    dispatcher.add("machine.home", {Role::operator_, Work::blocking, [](const json&, RpcContext&) -> json { return json::object(); }});
+    dispatcher.add("plan.preview", {Role::observer, Work::planning, [](const json&, RpcContext&) -> json { return json::object(); }});
+    dispatcher.add("boom", {Role::observer, Work::quick, [this](const json&, RpcContext&) -> json {
                               ++booms;
                               throw std::runtime_error("the machine caught fire");
                             }});
-    dispatcher.add("job.get", {Role::observer, false, [](const json& p, RpcContext&) -> json {
+    dispatcher.add("job.get", {Role::observer, Work::quick, [](const json& p, RpcContext&) -> json {
                                  throw RpcError(rpc_code::not_found, "no job " + p.value("job", std::string()),
                                                 {{"job", p.value("job", std::string())}});
                                }});
@@ -204,6 +205,28 @@ TEST_F(DispatcherTest, NumbersBeyondADoubleAreParseErrorsWithTheirByte) {
   EXPECT_EQ(parse_message(R"({"x":1.7976931348623157e308})").at("x").get<double>(), 1.7976931348623157e308);
 }
 
+// One 4 MB line [1,1,…] once became two million error replies (issue 13, D4): a batch over the
+// limit is one error, counted on the text before anything is built from it.
+TEST_F(DispatcherTest, ABatchOverTheLimitIsOneErrorBeforeParsing) {
+  std::string big = "[1";
+  for (int i = 0; i < 2'000'000; ++i) big += ",1";
+  big += "]";
+  const json error = error_of(big);
+  EXPECT_EQ(error.value("code", 0), rpc_code::batch_too_large) << error;
+  EXPECT_EQ(error["data"]["max_batch_entries"], 128) << error;
+  // Exactly at the limit is a batch; commas inside strings, objects and nested arrays are not entries.
+  std::string at_limit = "[";
+  for (int i = 0; i < 128; ++i) at_limit += std::string(i ? "," : "") + R"({"jsonrpc":"2.0","method":"echo","params":[1,2,"a,b"],"id":1})";
+  at_limit += "]";
+  const auto reply = line(at_limit);
+  ASSERT_TRUE(reply.has_value());
+  EXPECT_TRUE(reply->is_array()) << reply->dump().substr(0, 200);
+  EXPECT_EQ(reply->size(), 128u);
+  EXPECT_EQ(error_of(at_limit.substr(0, at_limit.size() - 1) + ",1]").value("code", 0), rpc_code::batch_too_large);
+  // A client reading the server's replies sets no such limit.
+  EXPECT_EQ(parse_message(big, {.max_depth = 128, .max_batch_entries = 10'000'000}).size(), 2'000'001u);
+}
+
 TEST_F(DispatcherTest, DeepNestingIsRefusedBeforeParsing) {
   const std::string deep = std::string(100000, '[') + std::string(100000, ']');
   const json error = error_of(deep);
@@ -249,21 +272,24 @@ TEST_F(DispatcherTest, UnknownMethodNamesItself) {
 }
 
 TEST_F(DispatcherTest, RegistrationMistakesAreRefused) {
-  EXPECT_THROW(dispatcher.add("echo", {Role::none, false, [](const json& p, RpcContext&) { return p; }}), std::logic_error);
-  EXPECT_THROW(dispatcher.add("empty", {Role::none, false, nullptr}), std::logic_error);
+  EXPECT_THROW(dispatcher.add("echo", {Role::none, Work::quick, [](const json& p, RpcContext&) { return p; }}), std::logic_error);
+  EXPECT_THROW(dispatcher.add("empty", {Role::none, Work::quick, nullptr}), std::logic_error);
   const auto names = dispatcher.methods();
   EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
-  EXPECT_EQ(names.size(), 9u);
+  EXPECT_EQ(names.size(), 10u);
 }
 
-TEST_F(DispatcherTest, SlowWhenAnyRequestOfTheMessageIsSlow) {
+TEST_F(DispatcherTest, AMessageRunsWhereItsHeaviestRequestRuns) {
   const json fast = {{"jsonrpc", "2.0"}, {"method", "echo"}, {"id", 1}};
   const json slow = {{"jsonrpc", "2.0"}, {"method", "machine.home"}, {"id", 2}};
-  EXPECT_FALSE(dispatcher.is_slow(fast));
-  EXPECT_TRUE(dispatcher.is_slow(slow));
-  EXPECT_TRUE(dispatcher.is_slow(json::array({fast, 1, slow})));
-  EXPECT_FALSE(dispatcher.is_slow(json::array({fast, 1})));
-  EXPECT_FALSE(dispatcher.is_slow({{"jsonrpc", "2.0"}, {"method", "no.such"}, {"id", 3}}));
+  const json plan = {{"jsonrpc", "2.0"}, {"method", "plan.preview"}, {"id", 4}};
+  EXPECT_EQ(dispatcher.work_of(fast), Work::quick);
+  EXPECT_EQ(dispatcher.work_of(slow), Work::blocking);
+  EXPECT_EQ(dispatcher.work_of(plan), Work::planning);
+  EXPECT_EQ(dispatcher.work_of(json::array({fast, 1, slow})), Work::blocking);
+  EXPECT_EQ(dispatcher.work_of(json::array({plan, fast, slow})), Work::planning);
+  EXPECT_EQ(dispatcher.work_of(json::array({fast, 1})), Work::quick);
+  EXPECT_EQ(dispatcher.work_of({{"jsonrpc", "2.0"}, {"method", "no.such"}, {"id", 3}}), Work::quick);
   EXPECT_EQ(message_size(json::array({fast, slow, 1})), 3u);
   EXPECT_EQ(message_size(fast), 1u);
 }
@@ -282,7 +308,7 @@ TEST_F(DispatcherTest, ARefusedMessageAnswersEachRequestWithAnId) {
 }
 
 TEST_F(DispatcherTest, WireTextReplacesInvalidUtf8) {
-  dispatcher.add("bytes", {Role::none, false, [](const json&, RpcContext&) -> json { return std::string("a\xff" "b"); }});
+  dispatcher.add("bytes", {Role::none, Work::quick, [](const json&, RpcContext&) -> json { return std::string("a\xff" "b"); }});
   const auto reply = dispatcher.handle_line(R"({"jsonrpc": "2.0", "method": "bytes", "id": 1})", ctx);
   ASSERT_TRUE(reply.has_value());
   EXPECT_EQ(json::parse(*reply).at("result"), "a\xEF\xBF\xBD" "b");

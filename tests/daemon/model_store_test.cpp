@@ -95,7 +95,7 @@ TEST(ModelStore, UploadsARealMeshInUnevenChunks) {
     offset += length;
     EXPECT_EQ(status.received, offset);
     EXPECT_FALSE(status.complete);
-    EXPECT_EQ(status.model, "sha256:" + up.sha);
+    EXPECT_EQ(status.model, "sha256:" + up.sha + ".ply");
   }
   const UploadStatus last = store.upload(up.chunk(offset, up.bytes.size() - offset));
   EXPECT_TRUE(last.complete);
@@ -103,7 +103,35 @@ TEST(ModelStore, UploadsARealMeshInUnevenChunks) {
   const fs::path stored = dir / "models" / (up.sha + ".ply");  // the extension lowercased
   EXPECT_EQ(read_all(stored), up.bytes);
   EXPECT_EQ(store.resolve("sha256:" + up.sha), stored);
+  EXPECT_EQ(store.resolve(last.model), stored);
   EXPECT_EQ(files_in(dir / "models" / ".partial"), 0u);
+}
+
+// The same bytes uploaded again under another format's name are that format from then on for that
+// name; once kept under the first extension they stayed so (issue 13: "keep the first upload's
+// extension"), and a misnamed upload could not be corrected.
+TEST(ModelStore, TheSameBytesUnderAnotherExtensionAreKeptInThatFormatToo) {
+  const fs::path dir = fresh_folder("models-extension");
+  ModelStore store(dir / "models", "");
+  Upload up;
+  up.name = "part.stl";  // PLY bytes, misnamed
+  const UploadStatus wrong = store.upload(up.chunk(0, up.bytes.size()));
+  EXPECT_EQ(wrong.model, "sha256:" + up.sha + ".stl");
+  EXPECT_EQ(store.resolve("sha256:" + up.sha), dir / "models" / (up.sha + ".stl"));
+  up.name = "part.ply";
+  const UploadStatus right = store.upload(up.chunk(0, 0));  // already stored: no bytes needed
+  EXPECT_TRUE(right.complete);
+  EXPECT_EQ(right.model, "sha256:" + up.sha + ".ply");
+  EXPECT_EQ(store.resolve(right.model), dir / "models" / (up.sha + ".ply"));
+  EXPECT_EQ(read_all(store.resolve(right.model)), up.bytes);
+  EXPECT_EQ(store.resolve(wrong.model), dir / "models" / (up.sha + ".stl"));
+  // Without the extension the reference is ambiguous now: refused, naming both.
+  const RpcError e = rpc_error_of([&] { store.resolve("sha256:" + up.sha); }, rpc_code::invalid_params);
+  EXPECT_EQ(e.data().at("path"), "/model");
+  EXPECT_THAT(e.what(), HasSubstr(right.model));
+  EXPECT_THAT(e.what(), HasSubstr(wrong.model));
+  rpc_error_of([&] { store.resolve("sha256:" + up.sha + ".obj"); }, rpc_code::not_found);
+  rpc_error_of([&] { store.resolve("sha256:" + up.sha + ".exe"); }, rpc_code::invalid_params);
 }
 
 TEST(ModelStore, AWrongSha256IsRefusedAndNothingIsStored) {

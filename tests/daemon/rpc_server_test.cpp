@@ -91,16 +91,32 @@ std::string line_of(const json& message) { return message.dump() + "\n"; }
 class Rig {
  public:
   explicit Rig(ServerOptions options = test_options()) : unix_path(options.unix_path) {
-    dispatcher.add("echo", {Role::observer, false, [](const json& p, RpcContext&) { return p; }});
-    dispatcher.add("admin.poke", {Role::operator_, false, [](const json&, RpcContext&) -> json { return "poked"; }});
-    dispatcher.add("slow.echo", {Role::observer, true, [](const json& p, RpcContext&) { return p; }});
-    dispatcher.add("slow.wait", {Role::observer, true, [this](const json& p, RpcContext&) {
+    dispatcher.add("echo", {Role::observer, Work::quick, [](const json& p, RpcContext&) { return p; }});
+    dispatcher.add("admin.poke", {Role::operator_, Work::quick, [](const json&, RpcContext&) -> json { return "poked"; }});
+    dispatcher.add("slow.echo", {Role::observer, Work::blocking, [](const json& p, RpcContext&) { return p; }});
+    dispatcher.add("slow.wait", {Role::observer, Work::blocking, [this](const json& p, RpcContext&) {
                                    gate.pass();
                                    return p;
                                  }});
-    dispatcher.add("whoami", {Role::none, false, [](const json&, RpcContext& ctx) -> json {
+    dispatcher.add("whoami", {Role::none, Work::quick, [](const json&, RpcContext& ctx) -> json {
                                 return {{"role", to_string(ctx.role())}, {"peer", ctx.peer()}};
                               }});
+    dispatcher.add("plan.wait", {Role::observer, Work::planning, [this](const json& p, RpcContext&) {
+                                   gate.pass();
+                                   return p;
+                                 }});
+    // Runs until its connection closes (as a preview does whose client went away), at most 20 s.
+    dispatcher.add("plan.until_closed", {Role::observer, Work::planning, [this](const json&, RpcContext& ctx) -> json {
+                                           running = true;
+                                           const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+                                           while (!ctx.closed() && std::chrono::steady_clock::now() < deadline)
+                                             std::this_thread::yield();
+                                           saw_closed = ctx.closed();
+                                           return nullptr;
+                                         }});
+    dispatcher.add("slow.big", {Role::observer, Work::blocking, [](const json& p, RpcContext&) -> json {
+                                  return std::string(p.at(0).get<std::size_t>(), 'x');
+                                }});
     server.emplace(io, dispatcher, std::move(options));
     server->start();
     thread = std::thread([this] { io.run(); });
@@ -126,6 +142,7 @@ class Rig {
 
   std::string unix_path;
   Gate gate;
+  std::atomic<bool> running{false}, saw_closed{false};
   asio::io_context io;
   asio::executor_work_guard<asio::io_context::executor_type> guard = asio::make_work_guard(io);
   RpcDispatcher dispatcher;
@@ -268,7 +285,7 @@ TEST(RpcServerTest, HalfALineThenSilenceIsClosedAfterTheIdleTimeout) {
   ServerOptions options = test_options();
   options.idle_timeout_s = 0.2;
   Rig rig(options);
-  auto quiet = rig.tcp();  // connected first, sends nothing: idle, but not mid-request
+  auto quiet = rig.local();  // connected first, sends nothing: idle, but not mid-request
   EXPECT_EQ(quiet.call("echo", {1}), json({1}));
   auto half = rig.tcp();
   half.send_raw(R"({"jsonrpc": "2.0", "method": "ec)");
@@ -281,26 +298,87 @@ TEST(RpcServerTest, HalfALineThenSilenceIsClosedAfterTheIdleTimeout) {
 TEST(RpcServerTest, TooManyConnectionsGetOneErrorLine) {
   ServerOptions options = test_options();
   options.max_connections = 3;
+  options.max_unix_connections = 2;
   Rig rig(options);
   std::vector<RpcClient> clients;
   for (int i = 0; i < 3; ++i) {
-    clients.push_back(i == 0 ? rig.local() : rig.tcp());
+    clients.push_back(rig.tcp());
     EXPECT_EQ(clients.back().call("echo", {i}), json({i}));
   }
   auto extra = rig.tcp();
   const json refused = next_reply(extra);
   EXPECT_EQ(refused.at("error").at("code"), rpc_code::too_many_connections);
+  EXPECT_EQ(refused.at("error").at("data"), json({{"max_connections", 3}}));
   EXPECT_TRUE(refused.at("id").is_null());
   EXPECT_TRUE(closed_by_server(extra));
   extra.close();  // the server keeps its end until the refused client has read the line and gone
-  EXPECT_EQ(error_of([&] { RpcClient::connect("unix:" + rig.unix_path, 10).call("echo"); }).code(),
-            rpc_code::too_many_connections);
+
+  // The Unix socket has its own allowance: TCP clients filling theirs do not lock it out.
+  auto local = rig.local(), second = rig.local();
+  EXPECT_EQ(local.call("admin.poke"), "poked");
+  EXPECT_EQ(second.call("echo", {7}), json({7}));
+  const RpcError full = error_of([&] { RpcClient::connect("unix:" + rig.unix_path, 10).call("echo"); });
+  EXPECT_EQ(full.code(), rpc_code::too_many_connections);
+  EXPECT_EQ(full.data(), json({{"max_unix_connections", 2}}));
 
   // A freed place is taken again.
   clients.front().close();
-  ASSERT_TRUE(eventually([&] { return rig.server->connection_count() <= 2; }));
+  ASSERT_TRUE(eventually([&] { return rig.server->connection_count() <= 4; }));
   auto again = rig.tcp();
   EXPECT_EQ(again.call("echo", {9}), json({9}));
+}
+
+// A TCP connection that sends no complete request for idle_timeout_s and waits for no reply is
+// closed unless it subscribed: idle connections cannot hold the connection allowance (issue 13, D5).
+TEST(RpcServerTest, ASilentTcpConnectionIsClosedUnlessItSubscribedOrAwaitsAReply) {
+  ServerOptions options = test_options();
+  options.idle_timeout_s = 0.3;
+  Rig rig(options);
+  auto silent = rig.tcp();
+  auto talked = rig.tcp();
+  EXPECT_EQ(talked.call("echo", {1}), json({1}));
+  auto subscriber = rig.tcp();
+  subscriber.call("server.subscribe", {{"topics", {"job"}}});
+  auto waiting = rig.tcp();
+  waiting.send_raw(line_of(request(5, "slow.wait", {5})));
+  auto local = rig.local();
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_TRUE(closed_by_server(silent));
+  EXPECT_TRUE(closed_by_server(talked));
+  EXPECT_GE(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(250));
+  // Well past the timeout: the subscriber, the one awaiting its reply and the Unix one are still served.
+  ASSERT_TRUE(rig.gate.wait_for_waiting(1));
+  EXPECT_EQ(subscriber.call("echo", {2}), json({2}));
+  rig.gate.open();
+  EXPECT_EQ(next_reply(waiting).at("id"), 5);
+  EXPECT_EQ(local.call("echo", {3}), json({3}));
+  // Once answered, the one that waited has its idle_timeout_s again, and then it goes too.
+  EXPECT_TRUE(closed_by_server(waiting));
+}
+
+// With tokens, a TCP connection that has not authenticated within auth_timeout_s is closed, even
+// one that keeps talking (issue 13, D5).
+TEST(RpcServerTest, AnUnauthenticatedTcpConnectionIsClosedAfterTheAuthTimeout) {
+  ServerOptions options = test_options();
+  options.tokens = {{"observer-token-0123456789", Role::observer}};
+  options.auth_timeout_s = 0.3;
+  Rig rig(options);
+  auto anonymous = rig.tcp();
+  auto authed = rig.tcp();
+  EXPECT_EQ(authed.call("server.auth", {{"token", "observer-token-0123456789"}}).at("role"), "observer");
+  authed.call("server.subscribe", {{"topics", {"job"}}});
+  const auto start = std::chrono::steady_clock::now();
+  bool closed = false;
+  while (!closed && std::chrono::steady_clock::now() - start < std::chrono::seconds(20)) {
+    try {
+      anonymous.call("whoami");  // talking is not enough
+    } catch (const RpcClientError&) {
+      closed = true;
+    }
+  }
+  EXPECT_TRUE(closed);
+  EXPECT_GE(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(250));
+  EXPECT_EQ(authed.call("echo", {1}), json({1}));
 }
 
 TEST(RpcServerTest, PendingLimitRefusesTheExcessAndFastCallsOvertake) {
@@ -418,8 +496,128 @@ TEST(RpcServerTest, ASubscriberThatDoesNotReadIsDropped) {
   EXPECT_TRUE(closed_by_server(sleeper));
 }
 
-TEST(RpcServerTest, HundredClientsAtOnce) {
+// A client that asks for replies and never reads them is dropped once they pass max_unsent_bytes,
+// and all connections together cannot hold more than max_total_unsent_bytes (issue 13, D4).
+TEST(RpcServerTest, AClientThatDoesNotReadItsRepliesIsDropped) {
+  ServerOptions options = test_options();
+  options.max_unsent_bytes = 48u << 20;
+  options.max_total_unsent_bytes = 80u << 20;
+  Rig rig(options);
+  auto reader = rig.local();
+  EXPECT_EQ(reader.call("echo", {0}), json({0}));
+  // A reply counts as unsent until the last byte is out, which a client that reads nothing stops
+  // long before 32 MiB: two fit the budget, the third does not.
+  {
+    std::vector<RpcClient> sleepers;
+    for (int i = 0; i < 3; ++i) sleepers.push_back(rig.tcp());
+    ASSERT_TRUE(eventually([&] { return rig.server->connection_count() == 4; }));
+    for (int i = 0; i < 3; ++i) {
+      sleepers[i].send_raw(line_of(request(i, "slow.big", {32u << 20})));
+      if (i < 2) {
+        ASSERT_TRUE(eventually([&] { return rig.server->unsent_bytes() >= (i + 1) * (32u << 20); }));
+      }
+    }
+    EXPECT_TRUE(closed_by_server(sleepers[2])) << "the third reply is over the total";
+    EXPECT_EQ(rig.server->connection_count(), 3u);
+  }
+  ASSERT_TRUE(eventually([&] { return rig.server->connection_count() == 1; }));
+  // One connection alone: over its own limit with two replies of 32 MiB.
+  auto greedy = rig.tcp();
+  greedy.send_raw(line_of(request(10, "slow.big", {32u << 20})) + line_of(request(11, "slow.big", {32u << 20})));
+  EXPECT_TRUE(closed_by_server(greedy));
+  EXPECT_EQ(reader.call("echo", {1}), json({1}));
+}
+
+TEST(RpcServerTest, ABatchOverTheLimitIsOneErrorAndTheConnectionStays) {
+  ServerOptions options = test_options();
+  options.max_batch_entries = 4;
+  Rig rig(options);
+  auto client = rig.tcp();
+  const std::string batch = "[" + request(1, "echo", {1}).dump() + "," + request(2, "echo", {2}).dump() + ",1,2,3]";
+  client.send_raw(batch + "\n");
+  const json error = next_reply(client);
+  EXPECT_EQ(error.at("error").at("code"), rpc_code::batch_too_large) << error;
+  EXPECT_EQ(error.at("error").at("data"), json({{"max_batch_entries", 4}}));
+  EXPECT_EQ(client.call("echo", {3}), json({3}));
+}
+
+// Previews run on their own workers and queue: flooding them leaves the blocking workers free, an
+// observer's blocking calls never take the operator's workers, and a full queue is server_busy.
+TEST(RpcServerTest, PlanningAndObserversCannotTakeTheOperatorsWorkers) {
+  ServerOptions options = test_options();
+  options.tokens = {{"observer-token-0123456789", Role::observer}};
+  options.workers = {.operator_threads = 1, .observer_threads = 1, .planning_threads = 1, .max_queued_planning = 1};
+  Rig rig(options);
+  auto observer = rig.tcp();
+  observer.call("server.auth", {{"token", "observer-token-0123456789"}});
+  observer.send_raw(line_of(request(1, "plan.wait", {1})) + line_of(request(2, "plan.wait", {2})) +
+                    line_of(request(3, "plan.wait", {3})) + line_of(request(4, "slow.wait", {4})));
+  const json busy = next_reply(observer);
+  EXPECT_EQ(busy.at("id"), 3);
+  EXPECT_EQ(busy.at("error").at("code"), rpc_code::server_busy) << busy;
+  ASSERT_TRUE(rig.gate.wait_for_waiting(2));  // one preview and the observer's slow call hold their workers
+  auto operator_client = rig.local();
+  EXPECT_EQ(operator_client.call("slow.echo", {5}), json({5}));
+  rig.gate.open();
+  std::set<json> answered;
+  for (int i = 0; i < 3; ++i) answered.insert(next_reply(observer).at("id"));
+  EXPECT_EQ(answered, (std::set<json>{1, 2, 4}));
+}
+
+// A long handler sees its connection close when the server stops (cmmd's SIGTERM), so a preview
+// ends at its next step and the stop does not wait for it.
+TEST(RpcServerTest, AHandlerSeesItsConnectionCloseWhenTheServerStops) {
   Rig rig;
+  auto client = rig.tcp();
+  client.send_raw(line_of(request(1, "plan.until_closed")));
+  ASSERT_TRUE(eventually([&] { return rig.running.load(); }));
+  const auto start = std::chrono::steady_clock::now();
+  rig.stop();  // joins the workers: returns once the handler has
+  EXPECT_TRUE(rig.saw_closed.load());
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+}
+
+// Token guessing: a connection is closed after its third wrong token, and wrong guesses from any
+// connection beyond the allowance are refused without comparing, the right token too, until the
+// allowance refills (issue 13: 34,000 guesses in 0.33 s).
+TEST(RpcServerTest, TokenGuessingIsThrottled) {
+  ServerOptions options = test_options();
+  options.tokens = {{"operator-token-0123456789", Role::operator_}};
+  Rig rig(options);
+  auto guesser = rig.tcp();
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(error_of([&] { guesser.call("server.auth", {{"token", "guess-" + std::to_string(i)}}); }).code(),
+              rpc_code::auth_failed);
+  EXPECT_TRUE(closed_by_server(guesser));
+
+  int refused_unchecked = 0;
+  for (int i = 0; i < 20 && refused_unchecked == 0; ++i) {
+    auto next = rig.tcp();
+    const RpcError e = error_of([&] { next.call("server.auth", {{"token", "guess"}}); });
+    EXPECT_EQ(e.code(), rpc_code::auth_failed);
+    refused_unchecked += e.data().contains("retry_after_s");
+  }
+  EXPECT_EQ(refused_unchecked, 1) << "20 wrong guesses in a burst were all compared";
+  auto right = rig.tcp();
+  const RpcError locked = error_of([&] { right.call("server.auth", {{"token", "operator-token-0123456789"}}); });
+  EXPECT_TRUE(locked.data().contains("retry_after_s")) << locked.what();
+  // The allowance comes back (5 guesses a second): the right token then works.
+  bool granted = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!granted && std::chrono::steady_clock::now() < deadline) {
+    try {
+      granted = rig.tcp().call("server.auth", {{"token", "operator-token-0123456789"}}).at("role") == "operator";
+    } catch (const RpcError&) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  EXPECT_TRUE(granted);
+}
+
+TEST(RpcServerTest, HundredClientsAtOnce) {
+  ServerOptions options = test_options();
+  options.max_unix_connections = 100;
+  Rig rig(options);
   constexpr int kClients = 100, kCalls = 40;
   std::atomic<int> ok{0};
   std::mutex failure_mutex;

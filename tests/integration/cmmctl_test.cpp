@@ -76,6 +76,25 @@ TEST(Cmmctl, StatusSubmitWatchJobsAndResultAgainstARunningCmmd) {
   EXPECT_EQ(cmmd.terminate(), 0);
 }
 
+// The README's sample corners name their plate by a path relative to the corners file; cmmd
+// cannot read the client's files, so cmmctl sends the plate inline (issue 13: it sent the path).
+TEST(Cmmctl, SubmitSendsAPlateTheCornersFileNamesInline) {
+  const auto dir = daemon::fresh_folder("cmmctl-sample-corners");
+  testing::CmmdInstance cmmd(dir / "cmmd", testing::sample_sim_block());
+  cmmd.start();
+  const std::string ctl = kCmmctl + " --endpoint unix:" + (dir / "cmmd" / "run" / "cmmd.sock").string();
+  auto r = cmm::test::run_command(ctl + " submit " CMMD_SOURCE_DIR "/config/samples/case3_block.ply --corners " CMMD_SOURCE_DIR
+                                  "/config/samples/case3_block.corners.json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("job 1 queued"), std::string::npos) << r.output;
+  const json request = testing::read_json_file(cmmd.job_folder(1) / "request.json");
+  EXPECT_EQ(request["registration"]["plate"]["corners"],
+            testing::read_json_file(CMMD_SOURCE_DIR "/config/plate.json")["corners"]) << request;
+  r = cmm::test::run_command(ctl + " cancel 1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(cmmd.terminate(), 0);
+}
+
 TEST(Cmmctl, SaysSoAndExitsNonZeroWhenCmmdIsNotThere) {
   const auto dir = daemon::fresh_folder("cmmctl-none");
   const std::string socket = (dir / "no" / "cmmd.sock").string();

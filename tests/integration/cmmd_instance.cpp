@@ -121,6 +121,17 @@ std::filesystem::path sample_scan(const std::filesystem::path& folder) {
   return mesh;
 }
 
+nlohmann::json timed_sim_block(double time_scale) {
+  nlohmann::json block = sample_sim_block();
+  block["time_scale"] = time_scale;
+  return block;
+}
+
+int submit_quick_job(daemon::RpcClient& client, const std::filesystem::path& scan_folder) {
+  return submit_job(client, sample_scan(scan_folder),
+                    {{"spacing_mm", 8}, {"registration", sample_measure_plate(scan_folder)}});
+}
+
 nlohmann::json sample_measure_plate(const std::filesystem::path& folder) {
   sample_scan(folder);
   return {{"measure_plate", read_json_file(folder / "plate_corners.json")}};

@@ -54,6 +54,11 @@ nlohmann::json wait_for_job(daemon::RpcClient& client, int job, const std::set<s
 
 // The simulator's sample setup shared by the daemon tests: case-3 block on the default plate.
 nlohmann::json sample_sim_block();
+// sample_sim_block with its motion in wall time / time_scale.
+nlohmann::json timed_sim_block(double time_scale);
+// A job on the sample scan with 8 mm spacing and the plate measured: a few seconds of probing at
+// time_scale 50. Returns its id.
+int submit_quick_job(daemon::RpcClient& client, const std::filesystem::path& scan_folder);
 // The measure_plate registration for sample_sim_block, as cmm-scan --plate-corners would write it.
 nlohmann::json sample_measure_plate(const std::filesystem::path& folder);
 // A scanned reference mesh of the sample part (cmm-scan), written once into `folder`.

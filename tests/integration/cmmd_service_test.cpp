@@ -21,6 +21,7 @@
 #include "daemon/rpc_client.hpp"
 #include "daemon/rpc_error.hpp"
 #include "notify_listener.hpp"
+#include "rpc_exchange.hpp"
 #include "tests/daemon/fresh_folder.hpp"
 #include "tests/tools/run_command.hpp"
 
@@ -31,66 +32,17 @@ using daemon::RpcClient;
 using daemon::RpcClientError;
 using daemon::RpcError;
 using nlohmann::json;
+using testing::closed_by_cmmd;
 using testing::CmmdInstance;
+using testing::error_of;
+using testing::next_reply;
+using testing::request_reply;
+constexpr auto tokens = testing::observer_and_operator_tokens;
 namespace rpc_code = daemon::rpc_code;
 
 const std::string kObserverToken = "observer-token-0123456789";
 const std::string kOperatorToken = "operator-token-0123456789";
 const std::string kCmmd = CMMD_BINARY_DIR "/daemon/cmmd";
-
-json tokens(const std::string& observer, const std::string& operator_token) {
-  return json::array({{{"token", observer}, {"role", "observer"}}, {{"token", operator_token}, {"role", "operator"}}});
-}
-
-// The error a call ends in; a call that succeeds fails the test.
-RpcError error_of(RpcClient& client, const std::string& method, const json& params = json::object()) {
-  try {
-    const json result = client.call(method, params);
-    ADD_FAILURE() << method << " " << params.dump() << " succeeded: " << result.dump();
-  } catch (const RpcError& e) {
-    return e;
-  }
-  return RpcError(0, "no error");
-}
-
-// The next line from cmmd, parsed; throws when none comes within timeout_s.
-json next_reply(RpcClient& client, double timeout_s = 60) {
-  const std::optional<std::string> line = client.read_line(timeout_s);
-  if (!line) throw std::runtime_error("no reply within " + std::to_string(timeout_s) + " s");
-  return json::parse(*line);
-}
-
-json request_reply(RpcClient& client, const std::string& line) {
-  client.send_raw(line + "\n");
-  return next_reply(client);
-}
-
-// True once cmmd has closed the connection, false when it is still open after timeout_s. Whatever
-// cmmd still sends before closing is skipped.
-bool closed_by_cmmd(RpcClient& client, double timeout_s) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  try {
-    for (;;) {
-      const double left = std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
-      if (left <= 0 || !client.read_line(left)) return false;
-    }
-  } catch (const RpcClientError&) {
-    return true;
-  }
-}
-
-// The sample part on the in-process simulator, its motion in wall time / time_scale, and a job on
-// its scan with 8 mm spacing: a few seconds of probing at time_scale 50.
-json timed_sim_block(double time_scale) {
-  json block = testing::sample_sim_block();
-  block["time_scale"] = time_scale;
-  return block;
-}
-
-int submit_quick_job(RpcClient& client, const std::filesystem::path& scan_folder) {
-  return testing::submit_job(client, testing::sample_scan(scan_folder),
-                             {{"spacing_mm", 8}, {"registration", testing::sample_measure_plate(scan_folder)}});
-}
 
 // The next line of cmmd's log (stderr, read with the ready line) that contains `text`; lines before it are skipped.
 std::string log_line_containing(testing::ChildProcess& cmmd, const std::string& text, double timeout_s) {
@@ -315,10 +267,10 @@ TEST(CmmdAccess, RefusesToListenBeyondLoopbackWithoutTokens) {
 
 TEST(CmmdLoad, AHundredClientsPollingWhileAJobRunsAreAllAnswered) {
   const auto dir = daemon::fresh_folder("service-load");
-  CmmdInstance cmmd(dir / "cmmd", timed_sim_block(50));
+  CmmdInstance cmmd(dir / "cmmd", testing::timed_sim_block(50));
   cmmd.start();
   RpcClient submitter = cmmd.client();
-  const int job = submit_quick_job(submitter, dir / "scan");
+  const int job = testing::submit_quick_job(submitter, dir / "scan");
 
   constexpr int kClients = 100;
   std::mutex mutex;
@@ -369,12 +321,12 @@ TEST(CmmdLoad, AHundredClientsPollingWhileAJobRunsAreAllAnswered) {
 
 TEST(CmmdLifecycle, SigtermMidJobExitsZeroAndTheRestartedDaemonHasItInterruptedAndResumable) {
   const auto dir = daemon::fresh_folder("service-sigterm");
-  CmmdInstance cmmd(dir / "cmmd", timed_sim_block(50));
+  CmmdInstance cmmd(dir / "cmmd", testing::timed_sim_block(50));
   cmmd.start();
   int job = 0;
   {
     RpcClient client = cmmd.client();
-    job = submit_quick_job(client, dir / "scan");
+    job = testing::submit_quick_job(client, dir / "scan");
     testing::wait_for_job(client, job, {"probing"}, 600);
     // Mid-job means touches made and touches to come: SIGTERM after the first job.touch.
     testing::wait_for_notification(client, "job.touch", [](const json& n) { return n["method"] == "job.touch"; }, 300);
