@@ -53,6 +53,10 @@ void read_server(hal::ConfigBlock& b, DaemonConfig& c) {
   s.workers.observer_threads = b.integer("observer_threads", s.workers.observer_threads, 1, 64);
   s.workers.planning_threads = b.integer("planning_threads", s.workers.planning_threads, 1, 64);
   s.workers.max_queued_planning = b.integer("max_queued_planning", s.workers.max_queued_planning, 0, 10000);
+  s.workers.max_waiting_bytes = static_cast<std::size_t>(
+      b.number("max_waiting_request_bytes", static_cast<double>(s.workers.max_waiting_bytes), 1 << 20, 1ull << 34));
+  if (s.workers.max_waiting_bytes < s.max_request_bytes)
+    b.problem("max_waiting_request_bytes", "must be at least max_request_bytes, or a request of that size never runs");
   s.tokens.clear();
   for (hal::ConfigBlock token : b.objects("tokens")) {
     AccessToken t;

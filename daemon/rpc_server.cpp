@@ -60,7 +60,7 @@ RpcServer::RpcServer(asio::io_context& io, RpcDispatcher& dispatcher, ServerOpti
     : io_(io),
       dispatcher_(dispatcher),
       options_(std::move(options)),
-      output_budget_(options_.max_total_unsent_bytes),
+      unsent_budget_(options_.max_total_unsent_bytes),
       tokens_(options_.tokens) {
   dispatcher_.add("server.auth", {Role::none, Work::quick, [this](const json& p, RpcContext& c) { return auth(p, c); }});
   dispatcher_.add("server.subscribe",
@@ -187,7 +187,7 @@ void RpcServer::admit(Socket socket, std::string peer, Role role, bool tcp) {
   const int allowed = tcp ? options_.max_connections : options_.max_unix_connections;
   const char* limit_name = tcp ? "max_connections" : "max_unix_connections";
   auto session = std::make_shared<RpcSession>(
-      RpcSession::Socket(std::move(socket)), id, std::move(peer), role, limits, dispatcher_, *workers_, output_budget_,
+      RpcSession::Socket(std::move(socket)), id, std::move(peer), role, limits, dispatcher_, *workers_, unsent_budget_,
       nullptr);
   bool over;
   {

@@ -16,8 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/auth_throttle.hpp"
+#include "daemon/byte_budget.hpp"
 #include "daemon/json_rpc.hpp"
-#include "daemon/output_budget.hpp"
 #include "daemon/worker_pools.hpp"
 
 namespace cmm::daemon {
@@ -77,7 +77,7 @@ class RpcServer {
   // connection, removes the Unix socket, and joins the workers (after running slow methods return).
   void stop();
   std::size_t connection_count() const;  // thread-safe
-  std::size_t unsent_bytes() const { return output_budget_.used(); }  // thread-safe: all connections' queues
+  std::size_t unsent_bytes() const { return unsent_budget_.used(); }  // thread-safe: all connections' queues
 
  private:
   void listen_tcp();
@@ -95,7 +95,7 @@ class RpcServer {
   std::optional<asio::ip::tcp::acceptor> tcp_acceptor_;
   std::optional<asio::local::stream_protocol::acceptor> unix_acceptor_;
   std::optional<WorkerPools> workers_;
-  OutputBudget output_budget_;
+  ByteBudget unsent_budget_;
   int tcp_port_ = 0;
   bool started_ = false, stopped_ = false, unix_bound_ = false;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);  // accept handlers outliving us see it gone

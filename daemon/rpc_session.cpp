@@ -30,7 +30,7 @@ std::string seconds_text(double s) {
 }  // namespace
 
 RpcSession::RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, SessionLimits limits,
-                       const RpcDispatcher& dispatcher, WorkerPools& workers, OutputBudget& budget, OnClosed on_closed)
+                       const RpcDispatcher& dispatcher, WorkerPools& workers, ByteBudget& budget, OnClosed on_closed)
     : socket_(std::move(socket)),
       context_(connection_id, std::move(peer), role),
       limits_(limits),
@@ -124,25 +124,23 @@ void RpcSession::on_line(std::string_view line) {
                               ") requests pending on this connection",
                           {{"max_pending_requests", limits_.max_pending_requests}})));
   }
-  if (work == Work::planning && !workers_.admit_planning(count)) {
-    spdlog::info("connection {} ({}): planning workers busy, a preview refused", context_.connection_id(), context_.peer());
-    return reply(refuse_message(
-        message, RpcError(rpc_code::server_busy, "every planning worker is busy and their queue is full: try again later",
-                          {{"retry", true}})));
+  if (const std::optional<std::string> busy = workers_.admit(work, count, line.size())) {
+    spdlog::info("connection {} ({}): {}", context_.connection_id(), context_.peer(), *busy);
+    return reply(refuse_message(message, RpcError(rpc_code::server_busy, *busy, {{"retry", true}})));
   }
-  run_slow(std::move(message), count, work);
+  run_slow(std::move(message), count, work, line.size());
 }
 
-void RpcSession::run_slow(nlohmann::json message, std::size_t count, Work work) {
+void RpcSession::run_slow(nlohmann::json message, std::size_t count, Work work, std::size_t bytes) {
   pending_ += count;
-  asio::post(workers_.pool(work, context_.role()), [self = shared_from_this(), message = std::move(message), count, work] {
+  asio::post(workers_.pool(work, context_.role()), [self = shared_from_this(), message = std::move(message), count, work, bytes] {
     std::optional<std::string> line;
     try {
       if (const auto response = self->dispatcher_.handle(message, self->context_)) line = to_wire(*response);
     } catch (const std::exception& e) {  // building the reply failed (out of memory): the request gets no answer
       spdlog::error("connection {}: a reply could not be made: {}", self->context_.connection_id(), e.what());
     }
-    if (work == Work::planning) self->workers_.release_planning(count);
+    self->workers_.release(work, count, bytes);
     asio::post(self->socket_.get_executor(), [self, line = std::move(line), count]() mutable {
       self->pending_ -= count;
       if (line && !self->closing_) self->queue(std::make_shared<const std::string>(std::move(*line)));

@@ -14,8 +14,8 @@
 #include <asio/generic/stream_protocol.hpp>
 #include <asio/steady_timer.hpp>
 
+#include "daemon/byte_budget.hpp"
 #include "daemon/json_rpc.hpp"
-#include "daemon/output_budget.hpp"
 #include "daemon/worker_pools.hpp"
 
 namespace cmm::daemon {
@@ -37,7 +37,7 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   using OnClosed = std::function<void(std::uint64_t connection_id)>;
 
   RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, SessionLimits limits,
-             const RpcDispatcher& dispatcher, WorkerPools& workers, OutputBudget& budget, OnClosed on_closed);
+             const RpcDispatcher& dispatcher, WorkerPools& workers, ByteBudget& budget, OnClosed on_closed);
 
   void start();
   void set_on_closed(OnClosed on_closed) { on_closed_ = std::move(on_closed); }
@@ -52,7 +52,7 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   void read();
   void on_read(const asio::error_code& ec, std::size_t n);
   void on_line(std::string_view line);
-  void run_slow(nlohmann::json message, std::size_t count, Work work);
+  void run_slow(nlohmann::json message, std::size_t count, Work work, std::size_t bytes);
   void reply(const std::optional<nlohmann::json>& response);
   void queue(std::shared_ptr<const std::string> line);
   void write();
@@ -70,7 +70,7 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   SessionLimits limits_;
   const RpcDispatcher& dispatcher_;
   WorkerPools& workers_;
-  OutputBudget& budget_;
+  ByteBudget& budget_;
   OnClosed on_closed_;
   asio::steady_timer timer_;       // idle, and the close's drain
   asio::steady_timer auth_timer_;

@@ -3,11 +3,13 @@
 // at once. Observers flooding previews or status calls thus never hold the operator's workers.
 #pragma once
 
-#include <atomic>
 #include <cstddef>
+#include <optional>
+#include <string>
 
 #include <asio/thread_pool.hpp>
 
+#include "daemon/byte_budget.hpp"
 #include "daemon/json_rpc.hpp"
 
 namespace cmm::daemon {
@@ -17,6 +19,9 @@ struct WorkerCounts {
   int observer_threads = 2;     // blocking calls of observer (and role none) connections
   int planning_threads = 1;     // plan.preview from anyone
   int max_queued_planning = 4;  // previews waiting for a planning thread; beyond, server_busy
+  // Request text waiting for or on the workers, all connections together (a line's JSON value takes
+  // up to 16 times its text); beyond, server_busy.
+  std::size_t max_waiting_bytes = 32u << 20;
   bool operator==(const WorkerCounts&) const = default;
 };
 
@@ -26,18 +31,18 @@ class WorkerPools {
 
   // Where a message of this work runs for a caller of this role (not for Work::quick).
   asio::thread_pool& pool(Work work, Role role);
-  // Admits `requests` more planning requests unless the planning threads and their queue are
-  // full; each admitted one is released once answered.
-  bool admit_planning(std::size_t requests);
-  void release_planning(std::size_t requests);
+  // Admits a message of `requests` requests and `bytes` of text, or says why not (the planning
+  // threads and their queue are full, or too much request text waits); release() once answered.
+  std::optional<std::string> admit(Work work, std::size_t requests, std::size_t bytes);
+  void release(Work work, std::size_t requests, std::size_t bytes);
 
   // Drops what waits, lets what runs finish, joins every thread.
   void stop_and_join();
 
  private:
   asio::thread_pool operators_, observers_, planning_;
-  std::size_t planning_capacity_;
-  std::atomic<std::size_t> planning_admitted_{0};
+  ByteBudget planning_slots_;  // planning requests running or waiting, one "byte" each
+  ByteBudget waiting_bytes_;
 };
 
 }  // namespace cmm::daemon

@@ -518,13 +518,15 @@ TEST(RpcServerTest, AClientThatDoesNotReadItsRepliesIsDropped) {
       }
     }
     EXPECT_TRUE(closed_by_server(sleepers[2])) << "the third reply is over the total";
-    EXPECT_EQ(rig.server->connection_count(), 3u);
+    EXPECT_TRUE(eventually([&] { return rig.server->connection_count() == 3; }));
   }
   ASSERT_TRUE(eventually([&] { return rig.server->connection_count() == 1; }));
-  // One connection alone: over its own limit with two replies of 32 MiB.
+  // One connection alone: over its own limit with two replies of 32 MiB. (Reading to see it closed
+  // would take the first reply and make room for the second: the count tells instead.)
   auto greedy = rig.tcp();
+  ASSERT_TRUE(eventually([&] { return rig.server->connection_count() == 2; }));
   greedy.send_raw(line_of(request(10, "slow.big", {32u << 20})) + line_of(request(11, "slow.big", {32u << 20})));
-  EXPECT_TRUE(closed_by_server(greedy));
+  EXPECT_TRUE(eventually([&] { return rig.server->connection_count() == 1; }));
   EXPECT_EQ(reader.call("echo", {1}), json({1}));
 }
 
@@ -562,6 +564,29 @@ TEST(RpcServerTest, PlanningAndObserversCannotTakeTheOperatorsWorkers) {
   std::set<json> answered;
   for (int i = 0; i < 3; ++i) answered.insert(next_reply(observer).at("id"));
   EXPECT_EQ(answered, (std::set<json>{1, 2, 4}));
+}
+
+// Requests waiting for the workers are bounded in bytes for all connections together: 64 pending
+// lines of 4 MiB each would otherwise be gigabytes of parsed JSON.
+TEST(RpcServerTest, RequestsWaitingForTheWorkersAreBoundedInBytes) {
+  ServerOptions options = test_options();
+  options.workers.operator_threads = 1;
+  options.workers.max_waiting_bytes = 3u << 20;
+  Rig rig(options);
+  auto client = rig.local();
+  const std::string pad(1u << 20, 'p');
+  std::string lines;
+  for (int i = 0; i < 4; ++i) lines += line_of(request(i, "slow.wait", {pad}));
+  client.send_raw(lines);
+  const json busy = next_reply(client);
+  EXPECT_EQ(busy.at("id"), 2) << busy.dump().substr(0, 200);  // the third brings over 3 MiB
+  EXPECT_EQ(busy.at("error").at("code"), rpc_code::server_busy);
+  EXPECT_EQ(next_reply(client).at("id"), 3);
+  rig.gate.open();
+  std::set<json> answered = {next_reply(client).at("id"), next_reply(client).at("id")};
+  EXPECT_EQ(answered, (std::set<json>{0, 1}));
+  // Once they are answered, their bytes are free again.
+  EXPECT_EQ(client.call("slow.echo", {pad}).at(0).get<std::string>().size(), pad.size());
 }
 
 // A long handler sees its connection close when the server stops (cmmd's SIGTERM), so a preview

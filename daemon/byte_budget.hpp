@@ -1,6 +1,5 @@
-// The bytes waiting in every connection's output queue together: a connection whose next line
-// would go over the server-wide budget is dropped, so clients that never read cannot together
-// hold more than this much of cmmd's memory.
+// A server-wide allowance of bytes, taken and given back from any thread: what all connections'
+// unsent replies, or all requests waiting for the workers, may hold of cmmd's memory together.
 #pragma once
 
 #include <atomic>
@@ -8,9 +7,9 @@
 
 namespace cmm::daemon {
 
-class OutputBudget {
+class ByteBudget {
  public:
-  explicit OutputBudget(std::size_t max_bytes) : max_bytes_(max_bytes) {}
+  explicit ByteBudget(std::size_t max_bytes) : max_bytes_(max_bytes) {}
   // Takes `bytes` unless that would go over the budget; thread-safe.
   bool take(std::size_t bytes) {
     std::size_t used = used_.load();
