@@ -194,7 +194,9 @@ void RpcServer::notify(const std::string& topic, const std::string& method, cons
   const auto line = std::make_shared<const std::string>(to_wire({{"jsonrpc", "2.0"}, {"method", method}, {"params", params}}));
   std::lock_guard lock(sessions_mutex_);
   for (const auto& [id, session] : sessions_)
-    if (session->context().subscribed(topic)) asio::post(io_, [session, line] { session->send_notification(line); });
+    // session = session: clang 14 cannot capture a structured binding (C++20 allows it, clang 16 does).
+    if (session->context().subscribed(topic))
+      asio::post(io_, [session = session, line] { session->send_notification(line); });
 }
 
 void RpcServer::set_tokens(std::vector<AccessToken> tokens) {
