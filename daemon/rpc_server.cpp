@@ -61,7 +61,8 @@ RpcServer::RpcServer(asio::io_context& io, RpcDispatcher& dispatcher, ServerOpti
       dispatcher_(dispatcher),
       options_(std::move(options)),
       unsent_budget_(options_.max_total_unsent_bytes),
-      tokens_(options_.tokens) {
+      tokens_(options_.tokens),
+      auth_throttle_(options_.auth_guesses_per_s, options_.auth_guess_burst) {
   dispatcher_.add("server.auth", {Role::none, Work::quick, [this](const json& p, RpcContext& c) { return auth(p, c); }});
   dispatcher_.add("server.subscribe",
                   {Role::observer, Work::quick, [this](const json& p, RpcContext& c) { return subscribe(p, c); }});
@@ -214,7 +215,9 @@ void RpcServer::notify(const std::string& topic, const std::string& method, cons
   const auto line = std::make_shared<const std::string>(to_wire({{"jsonrpc", "2.0"}, {"method", method}, {"params", params}}));
   std::lock_guard lock(sessions_mutex_);
   for (const auto& [id, session] : sessions_)
-    if (session->context().subscribed(topic)) asio::post(io_, [session, line] { session->send_notification(line); });
+    // session = session: clang 14 cannot capture a structured binding (C++20 allows it, clang 16 does).
+    if (session->context().subscribed(topic))
+      asio::post(io_, [session = session, line] { session->send_notification(line); });
 }
 
 void RpcServer::set_tokens(std::vector<AccessToken> tokens) {

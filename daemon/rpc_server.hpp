@@ -43,6 +43,7 @@ struct ServerOptions {
   // also closed when it sends no complete line for this long while it waits for no reply.
   double idle_timeout_s = 30;
   double auth_timeout_s = 10;                // with tokens: a TCP connection not authenticated by then is closed
+  double auth_guesses_per_s = 5, auth_guess_burst = 20;  // how fast wrong tokens may come (AuthThrottle)
   std::vector<AccessToken> tokens;           // empty: TCP is operator, and only loopback binds
   WorkerCounts workers;                      // the threads of the slow methods
   std::size_t max_unsent_bytes = 64u << 20;  // a connection further behind in reading than this is dropped

@@ -286,6 +286,10 @@ Body read_body(const std::filesystem::path& file, const Header& header, std::siz
     const Layout layout = is_vertex ? vertex_layout(file, element)
                           : is_face ? face_layout(file, element)
                                     : Layout{std::vector<int>(element.properties.size(), skipped)};
+    // An instance without properties takes no byte: 6e14 of them would be read for ever (binary).
+    if (element.count > 0 && element.properties.empty())
+      throw FileError::at_line(file, element.line, "element " + in_quotes(element.name) + " has " +
+                                                       std::to_string(element.count) + " instances but no properties");
     // Every instance takes at least a byte, so a count beyond the file size is a lie not to allocate for.
     const std::size_t plausible = std::min(element.count, file_size);
     if (is_vertex) body.points.reserve(3 * plausible);

@@ -22,7 +22,8 @@ std::optional<double> number(const std::string& s) {
   double v = 0;
   const char* end = s.data() + s.size();
   auto [ptr, ec] = std::from_chars(s.data(), end, v);
-  if (ec != std::errc() || ptr != end || s.empty()) return std::nullopt;
+  // Grbl prints no nan or inf; a driver that took one would compute with it.
+  if (ec != std::errc() || ptr != end || s.empty() || !std::isfinite(v)) return std::nullopt;
   return v;
 }
 
@@ -67,10 +68,10 @@ std::optional<StatusReport> parse_status(const std::string& line) {
   auto state = split(fields[0], ':');
   r.state = state[0];
   if (r.state.empty() || state.size() > 2) return std::nullopt;
-  if (state.size() == 2) {
-    auto sub = number(state[1]);
-    if (!sub) return std::nullopt;
-    r.substate = static_cast<int>(*sub);
+  if (state.size() == 2) {  // Hold:0, Door:1: a small code, never a double cast to int (1e307 is UB)
+    const char* end = state[1].data() + state[1].size();
+    auto [ptr, ec] = std::from_chars(state[1].data(), end, r.substate);
+    if (ec != std::errc() || ptr != end || state[1].empty() || r.substate < 0) return std::nullopt;
   }
   bool have_position = false;
   for (std::size_t i = 1; i < fields.size(); ++i) {

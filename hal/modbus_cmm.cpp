@@ -8,6 +8,7 @@
 
 #include "hal/config_block.hpp"
 #include "hal/modbus_map.hpp"
+#include "hal/modbus_status.hpp"
 #include "hal/utc_time.hpp"
 
 namespace cmm::hal {
@@ -273,19 +274,9 @@ Vec3 get_vec(const std::uint16_t* regs) {
 }  // namespace
 
 MachineStatus ModbusCmm::decode_status(const std::vector<std::uint16_t>& r) const {
-  MachineStatus s;
-  s.lifecycle = lifecycle_;
-  const std::uint16_t flags = r[mb::address("flags")];
-  s.homed = flags & mb::homed;
-  s.moving = flags & mb::moving;
-  s.estop = flags & mb::estop;
-  s.aborted = flags & mb::aborted;
-  if (const std::uint16_t code = r[mb::address("fault_code")]) s.fault = mb::fault_from_code(code);
-  s.position = get_vec(&r[mb::address("position_x")]);
-  s.t_s = mb::get_u32(&r[mb::address("clock")]) * 1e-3;
-  const std::size_t tip = r[mb::address("active_tip")];
   std::lock_guard lock(tips_mutex_);
-  s.tip_id = tip < tip_ids_.size() ? tip_ids_[tip] : "";
+  MachineStatus s = mb::decode_status(r, tip_ids_);
+  s.lifecycle = lifecycle_;
   return s;
 }
 
@@ -311,24 +302,10 @@ MachineInfo ModbusCmm::info() {
   info.probe_speed_mm_s = mb::get_u32(at(mb::address("probe_speed"))) * 1e-3;
   info.reference_sphere = ReferenceSphereInfo{get_vec(at(mb::address("sphere_x"))), mb::get_u32(at(mb::address("sphere_radius"))) * 1e-6};
   const int tips = std::min<int>(*at(mb::address("tip_count")), mb::kMaxTips);
-  constexpr int entry = mb::address("tip_touches") + 1 - mb::address("tip_id");
   std::vector<std::string> ids;
   for (int i = 0; i < tips; ++i) {
-    auto t = read(aux_link(), mb::address("tip_id") + i * mb::kTipStride, entry, "info");
-    auto in = [&](std::uint16_t address) { return &t[static_cast<std::size_t>(address - mb::address("tip_id"))]; };
-    TipInfo tip;
-    tip.id = mb::get_ascii(in(mb::address("tip_id")), 4);
-    tip.ball_radius_mm = mb::get_u32(in(mb::address("tip_radius"))) * 1e-6;
-    tip.offset = get_vec(in(mb::address("tip_offset_x")));
-    if (const std::uint32_t when = mb::get_u32(in(mb::address("tip_qualified")))) {
-      TipQualification q;
-      q.ball_radius_mm = tip.ball_radius_mm;
-      q.offset = tip.offset;
-      q.residual_rms_mm = mb::get_u32(in(mb::address("tip_residual"))) * 1e-6;
-      q.touches = *in(mb::address("tip_touches"));
-      q.time_utc = utc_text(when);
-      tip.qualification = q;
-    }
+    auto t = read(aux_link(), mb::address("tip_id") + i * mb::kTipStride, mb::kTipEntryCount, "info");
+    const TipInfo tip = mb::decode_tip(t);
     ids.push_back(tip.id);
     info.tips.push_back(tip);
   }
@@ -360,14 +337,8 @@ TouchResult ModbusCmm::probe(const ProbeMove& move) {
   mb::put_u32(field(block, mb::address("retract")), mb::to_unsigned(move.retract_mm, 1e-6));
   *field(block, mb::address("probe_flags")) = move.fail_on_miss ? 1 : 0;
   auto r = run_command(block, "probe", true);
-  TouchResult t;
-  t.contact = r[mb::address("touch_contact")] != 0;
-  t.centre = get_vec(&r[mb::address("touch_x")]);
-  t.travel_mm = mb::get_u32(&r[mb::address("touch_travel")]) * 1e-6;
-  t.t_s = mb::get_u32(&r[mb::address("touch_clock")]) * 1e-3;
-  t.tip_id = decode_status(r).tip_id;
-  if (!t.contact) t.centre = decode_status(r).position;
-  return t;
+  std::lock_guard lock(tips_mutex_);
+  return mb::decode_touch(r, tip_ids_);
 }
 
 void ModbusCmm::stop() {

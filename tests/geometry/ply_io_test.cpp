@@ -204,5 +204,22 @@ TEST(Ply, DataAfterTheLastElementIsAnError) {
   }
 }
 
+// Found by the ply fuzz target (tests/fuzz/corpus/ply/timeout-b7fb2c91…): a binary element without
+// properties takes no bytes, so "element marker 666666666666660" kept the reader busy for ever.
+TEST(Ply, AnElementWithInstancesButNoPropertiesIsAnError) {
+  for (const char* format : {"binary_little_endian", "ascii"}) {
+    const std::string text = std::string("ply\nformat ") + format +
+                             " 1.0\nelement marker 3\nelement vertex 1\nproperty float x\nproperty float y\n"
+                             "property float z\nend_header\n" +
+                             (format[0] == 'a' ? std::string("0 0 0\n") : std::string(12, '\0'));
+    try {
+      read_ply("marker.ply", text);
+      FAIL() << format << ": no error";
+    } catch (const FileError& e) {
+      EXPECT_THAT(e.what(), HasSubstr("marker.ply: line 3: element 'marker' has 3 instances but no properties"));
+    }
+  }
+}
+
 }  // namespace
 }  // namespace cmm::geometry

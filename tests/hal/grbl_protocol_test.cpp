@@ -25,6 +25,20 @@ TEST(GrblStatus, ParsesRealGrblAndOurExtension) {
   EXPECT_FALSE(parse_status("Idle|MPos:1,2,3"));
 }
 
+// Found by the grbl fuzz target (tests/fuzz/corpus/grbl/crash-f6571d5e…): a substate beyond int was
+// cast from double (undefined behaviour), and nan or inf passed as a position.
+TEST(GrblStatus, RefusesASubstateBeyondIntAndNumbersThatAreNotFinite) {
+  EXPECT_FALSE(parse_status("<Hold:1e307|MPos:0,0,0|FS:0,0>"));
+  EXPECT_FALSE(parse_status("<Hold:-1|MPos:0,0,0|FS:0,0>"));
+  EXPECT_FALSE(parse_status("<Hold:0.5|MPos:0,0,0|FS:0,0>"));
+  EXPECT_EQ(parse_status("<Door:1|MPos:0,0,0|FS:0,0>")->substate, 1);
+  EXPECT_FALSE(parse_status("<Idle|MPos:nan,0,0|FS:0,0>"));
+  EXPECT_FALSE(parse_status("<Idle|MPos:0,inf,0|FS:0,0>"));
+  EXPECT_FALSE(parse_status("<Idle|MPos:0,0,0|FS:-inf,0>"));
+  EXPECT_FALSE(parse_status("<Idle|MPos:0,0,0|T:nan>"));
+  EXPECT_FALSE(parse_probe("[PRB:1e999,0,0:1]"));
+}
+
 TEST(GrblStatus, RoundTripsToANanometre) {
   StatusReport r;
   r.state = "Run";

@@ -1,0 +1,135 @@
+// Fuzzes cmmd's JSON-RPC entry: a connection's bytes framed into lines as daemon/rpc_session.cpp does
+// ('\n', a '\r' before it dropped, blank lines skipped, a last line without '\n' dropped), each line
+// through parse_message and RpcDispatcher as RpcSession::on_line does, with the real server.auth and
+// server.subscribe of an RpcServer that is never started, and the application methods' request
+// parsing (job.submit, plan.preview, registration.fit, model.upload's base64) behind their roles. The framing itself is
+// private to RpcSession and needs a socket, so it is mirrored here, not called.
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include <asio/io_context.hpp>
+#include <spdlog/spdlog.h>
+
+#include "daemon/base64.hpp"
+#include "daemon/daemon_config.hpp"
+#include "daemon/job_request.hpp"
+#include "daemon/json_rpc.hpp"
+#include "daemon/rpc_server.hpp"
+#include "fuzz_support.hpp"
+#include "planner/registration.hpp"
+
+namespace {
+
+using namespace cmm::daemon;
+using nlohmann::json;
+
+// The methods of docs/api.md with the roles and slowness service_methods.cpp gives them; what needs
+// a machine or the state folder fails as a handler does (−32603), what parses a request parses it.
+struct Harness {
+  asio::io_context io;
+  RpcDispatcher dispatcher;
+  DaemonConfig config = daemon_config_from_json(json::object(), "<fuzz>", "/nonexistent");
+  std::optional<RpcServer> server;
+
+  Harness() {
+    spdlog::set_level(spdlog::level::off);
+    const auto no_machine = [](const json&, RpcContext&) -> json { throw std::runtime_error("no machine in the harness"); };
+    const auto empty = [](const json&, RpcContext&) { return json::object(); };
+    dispatcher.add("server.info", {Role::none, Work::quick, [this](const json&, RpcContext& ctx) {
+                     return json{{"name", "cmmd"}, {"role", to_string(ctx.role())}, {"methods", dispatcher.methods()}};
+                   }});
+    for (const char* m : {"machine.status", "job.result"}) dispatcher.add(m, {Role::observer, Work::blocking, no_machine});
+    for (const char* m : {"machine.home", "machine.reset", "machine.qualify"})
+      dispatcher.add(m, {Role::operator_, Work::blocking, no_machine});
+    for (const char* m : {"machine.stop", "machine.abort", "job.pause", "job.resume", "job.cancel"})
+      dispatcher.add(m, {Role::operator_, Work::quick, empty});
+    for (const char* m : {"job.get", "job.list"}) dispatcher.add(m, {Role::observer, Work::quick, empty});
+    dispatcher.add("job.submit", {Role::operator_, Work::blocking, [this](const json& p, RpcContext&) {
+                     const JobRequest r = parse_job_request(p, config);
+                     return json{{"model", r.model}, {"name", r.name}};
+                   }});
+    dispatcher.add("plan.preview", {Role::observer, Work::planning, [this](const json& p, RpcContext&) {
+                     const JobRequest r = parse_job_request(p, config, true);
+                     return json{{"model", r.model}};
+                   }});
+    // As service_methods.cpp's registration.fit: the config's plate unless the params give one.
+    dispatcher.add("registration.fit", {Role::observer, Work::blocking, [this](const json& p, RpcContext&) {
+                     try {
+                       json input = p;
+                       if (!input.contains("plate")) input["plate"] = cmm::planner::to_json(config.plate);
+                       return cmm::planner::to_json(
+                           cmm::planner::fit_registration(cmm::planner::registration_from_json(input, "registration.fit")));
+                     } catch (const cmm::planner::RegistrationError& e) {
+                       throw RpcError(rpc_code::registration_error, e.what(), {{"corners", e.corners()}});
+                     } catch (const RpcError&) {
+                       throw;
+                     } catch (const std::exception& e) {
+                       throw RpcError(rpc_code::invalid_params, e.what());
+                     }
+                   }});
+    // ModelStore::upload's first step, without the state folder: the chunk's base64, which must
+    // decode to bytes that encode back to the same text (the alphabet and padding are strict).
+    dispatcher.add("model.upload", {Role::operator_, Work::blocking, [](const json& p, RpcContext&) -> json {
+                     if (p.is_object() && p.contains("data") && p["data"].is_string()) {
+                       const auto& text = p["data"].get_ref<const std::string&>();
+                       std::string bytes;
+                       try {
+                         bytes = decode_base64(text);
+                       } catch (const std::invalid_argument& e) {
+                         throw_invalid_param("/data", e.what());
+                       }
+                       if (encode_base64(bytes) != text) __builtin_trap();
+                     }
+                     throw std::runtime_error("no state folder in the harness");
+                   }});
+    dispatcher.add("fuzz.nonstandard", {Role::none, Work::quick, [](const json&, RpcContext&) -> json { throw 7; }});
+    ServerOptions options;
+    options.tcp_enabled = false;
+    options.tokens = {{"observer-token-0123456789", Role::observer}, {"operator-token-0123456789", Role::operator_}};
+    // Wrong guesses from earlier inputs must not throttle server.auth for the later ones.
+    options.auth_guess_burst = 1e15;
+    server.emplace(io, dispatcher, options);
+  }
+
+  // RpcSession::on_line, with the reply turned into its wire text.
+  void on_line(std::string_view line, RpcContext& ctx) const {
+    if (line.find_first_not_of(" \t") == std::string_view::npos) return;
+    json message;
+    try {
+      message = parse_message(line);
+    } catch (const RpcError& e) {
+      (void)to_wire(error_response(nullptr, e));
+      return;
+    }
+    if (dispatcher.work_of(message) != Work::quick) {
+      // The reply when the connection is over max_pending_requests, then the worker's answer.
+      (void)message_size(message);
+      if (const auto refused = refuse_message(message, RpcError(rpc_code::too_many_pending, "too many")))
+        (void)to_wire(*refused);
+    }
+    if (const auto response = dispatcher.handle(message, ctx)) (void)to_wire(*response);
+  }
+};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static const Harness harness;
+  // A socket peer with tokens configured starts with no role; server.auth raises it.
+  RpcContext ctx(1, "fuzz", Role::none);
+  const std::string_view bytes = cmm::fuzz::text_of(data, size);
+  std::size_t begin = 0;
+  for (auto end = bytes.find('\n'); end != std::string_view::npos; end = bytes.find('\n', begin)) {
+    std::string_view line = bytes.substr(begin, end - begin);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    begin = end + 1;
+    harness.on_line(line, ctx);
+  }
+  // The bytes after the last newline: RpcSession drops them at EOF; handle_line is the other entry.
+  if (begin < bytes.size()) (void)harness.dispatcher.handle_line(bytes.substr(begin), ctx);
+  return 0;
+}

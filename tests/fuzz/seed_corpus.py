@@ -1,0 +1,205 @@
+#!/usr/bin/python3
+"""Writes the hand-made seeds of tests/fuzz/corpus/<target>/ (files named seed-*): small meshes in
+every format and encoding cut from tests/data, the broken files of tests/data/broken, the config
+JSON of config/, and protocol lines and JSON-RPC requests after docs/api.md and docs/hal.md.
+Inputs the fuzzer found are kept beside them under their SHA-1 names. Run from anywhere; rewrites
+the seed-* files only."""
+import json
+import pathlib
+import shutil
+import struct
+
+root = pathlib.Path(__file__).resolve().parents[2]
+corpus = root / "tests/fuzz/corpus"
+data = root / "tests/data"
+
+
+def put(target, name, content):
+    folder = corpus / target
+    folder.mkdir(parents=True, exist_ok=True)
+    if isinstance(content, str):
+        content = content.encode()
+    (folder / f"seed-{name}").write_bytes(content)
+
+
+for old in corpus.glob("*/seed-*"):
+    old.unlink()
+
+# --- meshes: the first faces of fandisk.ply whose corners are among its first vertices ---------
+lines = (data / "fandisk.ply").read_text().splitlines()
+end = lines.index("end_header")
+nv = int(next(l for l in lines if l.startswith("element vertex")).split()[2])
+verts = [tuple(float(x) for x in l.split()[:3]) for l in lines[end + 1:end + 1 + nv]]
+faces = []
+for l in lines[end + 1 + nv:]:
+    f = [int(x) for x in l.split()[1:]]
+    if max(f) < 24:
+        faces.append(f)
+    if len(faces) == 12:
+        break
+used = sorted({i for f in faces for i in f})
+remap = {old: new for new, old in enumerate(used)}
+V = [verts[i] for i in used]
+F = [[remap[i] for i in f] for f in faces]
+N = [(0.0, 0.0, 1.0)] * len(V)
+
+
+def ply_ascii(normals=False, with_faces=True):
+    props = "property float x\nproperty float y\nproperty float z\n"
+    if normals:
+        props += "property float nx\nproperty float ny\nproperty float nz\n"
+    head = f"ply\nformat ascii 1.0\ncomment cut from tests/data/fandisk.ply\nelement vertex {len(V)}\n{props}"
+    if with_faces:
+        head += f"element face {len(F)}\nproperty list uchar int vertex_indices\n"
+    body = "".join(" ".join(map(str, v + (N[i] if normals else ()))) + "\n" for i, v in enumerate(V))
+    if with_faces:
+        body += "".join(f"3 {a} {b} {c}\n" for a, b, c in F)
+    return head + "end_header\n" + body
+
+
+def ply_binary(order, vtype="float", itype="int", extra=False):
+    fmt = {"<": "binary_little_endian", ">": "binary_big_endian"}[order]
+    code = {"float": "f", "double": "d"}[vtype]
+    icode = {"int": "i", "uint": "I", "short": "h", "uchar": "B"}[itype]
+    head = f"ply\nformat {fmt} 1.0\nelement vertex {len(V)}\n"
+    head += "".join(f"property {vtype} {c}\n" for c in "xyz")
+    if extra:
+        head += "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+    head += f"element face {len(F)}\nproperty list uchar {itype} vertex_indices\n"
+    if extra:
+        head += "element edge 1\nproperty int vertex1\nproperty int vertex2\n"
+    head += "end_header\n"
+    body = b"".join(struct.pack(order + code * 3, *v) + (b"\x10\x20\x30" if extra else b"") for v in V)
+    body += b"".join(struct.pack(order + "B" + icode * 3, 3, *f) for f in F)
+    if extra:
+        body += struct.pack(order + "ii", 0, 1)
+    return head.encode() + body
+
+
+put("ply", "ascii.ply", ply_ascii())
+put("ply", "ascii-normals.ply", ply_ascii(normals=True))
+put("ply", "ascii-cloud.ply", ply_ascii(with_faces=False))
+put("ply", "binary-le.ply", ply_binary("<"))
+put("ply", "binary-be-double.ply", ply_binary(">", "double", "uint"))
+put("ply", "binary-le-colours-edges.ply", ply_binary("<", "float", "short", extra=True))
+quad = "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n" \
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n"
+put("ply", "quad.ply", quad)
+
+solid = "solid cut\n" + "".join(
+    "  facet normal 0 0 1\n    outer loop\n" + "".join(f"      vertex {x} {y} {z}\n" for x, y, z in (V[a], V[b], V[c]))
+    + "    endloop\n  endfacet\n" for a, b, c in F) + "endsolid cut\n"
+put("stl", "ascii.stl", solid)
+binary = b"binary STL cut from tests/data/fandisk.ply".ljust(80, b" ") + struct.pack("<I", len(F))
+for a, b, c in F:
+    binary += struct.pack("<12fH", 0, 0, 1, *V[a], *V[b], *V[c], 0)
+put("stl", "binary.stl", binary)
+put("stl", "binary-starting-solid.stl", b"solid but binary".ljust(80, b" ") + binary[80:])
+
+obj = "# cut from tests/data/fandisk.ply\no part\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in V)
+put("obj", "plain.obj", obj + "".join(f"f {a+1} {b+1} {c+1}\n" for a, b, c in F))
+put("obj", "normals.obj", obj + "vn 0 0 1\nvt 0 0\n" + "".join(f"f {a+1}/1/1 {b+1}/1/1 {c+1}/1/1\n" for a, b, c in F))
+put("obj", "negative-quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\ng g\nusemtl m\ns 1\nf -4//1 -3//1 -2//1 -1//1\n")
+put("obj", "cloud.obj", obj)
+
+off_v = "".join(f"{x} {y} {z}\n" for x, y, z in V)
+off_f = "".join(f"3 {a} {b} {c}\n" for a, b, c in F)
+put("off", "plain.off", f"OFF\n# cut from tests/data/fandisk.ply\n{len(V)} {len(F)} 0\n" + off_v + off_f)
+put("off", "noff.off", f"NOFF\n{len(V)} {len(F)} 0\n" + "".join(f"{x} {y} {z} 0 0 1\n" for x, y, z in V) + off_f)
+put("off", "coff-quad.off", "COFF\n4 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n1 1 0 0 0 255 255\n0 1 0 1 1 1 255\n4 0 1 2 3 1 0 0\n")
+put("off", "header-counts-one-line.off", f"OFF {len(V)} 0 0\n" + off_v)
+
+put("xyz", "plain.xyz", "".join(f"{x} {y} {z}\n" for x, y, z in V))
+put("xyz", "normals-commas-comments.xyz", "# x, y, z, nx, ny, nz\n\n" + "".join(f"{x},{y},{z},0,0,1\n" for x, y, z in V))
+
+for broken in sorted((data / "broken").iterdir()):
+    put(broken.suffix[1:], "broken-" + broken.name, broken.read_bytes())
+
+# --- JSON files: config/ and its samples ---------------------------------------------------------
+machine = json.loads((root / "config/machine.json").read_text())
+plate = json.loads((root / "config/plate.json").read_text())
+corners = json.loads((root / "config/samples/case3_block.corners.json").read_text())
+cmmd = json.loads((root / "config/cmmd.json").read_text())
+demo_sim = json.loads((root / "config/samples/demo_sim.json").read_text())
+put("machine", "machine.json", (root / "config/machine.json").read_bytes())
+put("plate", "plate.json", (root / "config/plate.json").read_bytes())
+put("plate", "hole-fiducial.json", json.dumps(dict(plate, fiducial={"kind": "hole", "corner": 2, "diameter_mm": 6, "offset_mm": [10, 10]})))
+put("registration", "case3_block.corners.json", (root / "config/samples/case3_block.corners.json").read_bytes())
+inline = dict(corners, plate=plate)
+put("registration", "inline-plate.json", json.dumps(inline))
+put("registration", "no-plate-scan-up.json", json.dumps({"corners": corners["corners"], "noise_scan_mm": 0.02,
+                                                         "noise_machine_mm": 0.005, "scan_up": [0, 0, 1]}))
+put("daemon_config", "cmmd.json", (root / "config/cmmd.json").read_bytes())
+put("daemon_config", "demo-sim.json", json.dumps(dict(cmmd, machine=demo_sim)))
+put("daemon_config", "modbus.json", json.dumps(dict(cmmd, machine={"driver": "modbus", "transport": "rtu", "device": "/tmp/ttyX", "baud": 115200, "parity": "E", "heartbeat_s": 0.5})))
+put("daemon_config", "grbl-tokens.json", json.dumps(dict(cmmd, machine={"driver": "serial", "device": "/tmp/ttyACM0", "baud": 115200},
+    server=dict(cmmd["server"], tcp_bind="0.0.0.0", tokens=[{"token": "0123456789abcdef", "role": "operator"}]),
+    machine_description=machine, plate=plate)))
+
+# --- job requests and JSON-RPC lines after docs/api.md --------------------------------------------
+given = {"corners": corners["corners"], "plate": plate}
+measure = {"measure_plate": {"scan_corners": [{"id": c["id"], "scan": c["scan"]} for c in corners["corners"]],
+                             "rough_machine": [{"id": c["id"], "machine": c["machine"]} for c in corners["corners"]]}}
+submit = {"model": "sha256:" + "0" * 64, "name": "case3", "scale": 1, "delta_mm": 0.2, "spacing_mm": 2,
+          "feature_angle_deg": 30, "seed": 1, "registration": given}
+put("job_request", "given.json", json.dumps(submit))
+put("job_request", "measure-plate.json", json.dumps(dict(submit, model="file:part.stl", registration=measure)))
+put("job_request", "preview.json", json.dumps({"model": "file:part.ply"}))
+
+
+def rpc(method, params=None, id=1):
+    message = {"jsonrpc": "2.0", "method": method, "id": id}
+    if params is not None:
+        message["params"] = params
+    return json.dumps(message)
+
+
+session = [
+    rpc("server.info"),
+    rpc("server.auth", {"token": "operator-token-0123456789"}, 2),
+    rpc("server.subscribe", {"topics": ["job", "machine"]}, 3),
+    rpc("machine.status", None, "s"),
+    rpc("model.upload", {"name": "part.stl", "size": 3, "sha256": "a" * 64, "offset": 0, "data": "YWJj"}, 4),
+    rpc("job.submit", submit, 5),
+    rpc("plan.preview", {"model": "file:part.ply"}, 6),
+    rpc("registration.fit", {"corners": corners["corners"]}, 7),
+    rpc("job.get", {"job": 1}, 8),
+    rpc("job.resume", {"job": 1, "reregister": True}, 9),
+    rpc("job.result", {"job": 1, "format": "csv"}, None),
+    json.dumps({"jsonrpc": "2.0", "method": "machine.stop"}),
+]
+put("json_rpc", "session.jsonl", "\n".join(session) + "\n")
+put("json_rpc", "crlf-blank-lines.jsonl", "\r\n\r\n  \t\r\n".join(session[:3]) + "\r\n" + session[3])
+put("json_rpc", "batch.jsonl", json.dumps([json.loads(session[1]), json.loads(session[8]),
+                                           {"jsonrpc": "2.0", "method": "job.list"}, 1, {"foo": "boo"}]) + "\n[]\n")
+put("json_rpc", "observer.jsonl", rpc("server.auth", {"token": "observer-token-0123456789"}) + "\n" +
+    rpc("machine.home") + "\n" + rpc("fuzz.nonstandard") + "\n")
+put("json_rpc", "invalid.jsonl", '{"jsonrpc": "2.0", "method": "foobar, "params": "bar", "baz]\n'
+    '{"jsonrpc": "2.0", "method": 1, "params": "bar"}\n{"jsonrpc": "1.0", "method": "server.info", "id": {}}\n'
+    '[1e400]\n' + "[" * 200 + "]" * 200 + "\n")
+put("job_request", "rpc-line.json", session[5])
+
+# --- Grbl replies (docs/hal.md) and Modbus register blocks (docs/modbus-map.md) -------------------
+put("grbl", "replies.txt", "Grbl 1.1h ['$' for help]\r\nok\r\n<Idle|MPos:0.000000,0.000000,0.000000|FS:0,0|T:0.000000>\r\n"
+    "<Hold:0|MPos:1.5,-2.25,60|FS:1200,0|Pn:PZ|T:12.5>\r\n<Run|MPos:10,20,30|F:600|Bf:15,128|Ln:3|WCO:0,0,0>\r\n"
+    "[PRB:100.123456,200.5,-3.25:1]\r\n[PRB:0,0,0:0]\r\nerror:9\r\nerror:15\r\nALARM:1\r\nALARM:3\r\nALARM:5\r\n"
+    "[MSG:Reset to continue]\r\n$10=1\n")
+put("grbl", "alarm-states.txt", "<Alarm|MPos:0,0,0|FS:0,0|Pn:R>\n<Door:1|MPos:0,0,0>\nerror:20\nerror:33\nALARM:9\n")
+
+
+def regs(*values):
+    return b"".join(struct.pack(">H", v & 0xFFFF) for v in values)
+
+
+def u32(v):
+    return [(v >> 16) & 0xFFFF, v & 0xFFFF]
+
+
+status = [1, 0b1, 0, 7, 0] + u32(100_000_000) + u32(-2_000_000 & 0xFFFFFFFF) + u32(60_000_000) + u32(123_456) + [1, 1] \
+    + u32(100_500_000) + u32(200_000_000) + u32(-3_250_000 & 0xFFFFFFFF) + u32(4_321_000) + u32(120_000)
+tip = [0x5431, 0, 0, 0] + u32(999_800) + u32(4000) + u32(0) + u32(-2000 & 0xFFFFFFFF) + u32(1_764_000_000) + u32(300) + [25]
+text = [int.from_bytes(b"Ea", "big"), int.from_bytes(b"rl", "big"), int.from_bytes(b"y!", "big"), 0]
+put("modbus_status", "status-tip-text.bin", regs(*status, *tip, *text))
+put("modbus_status", "fault.bin", regs(0, 0b101101, 8, 3, 8, *([0] * 20), *tip))
+put("modbus_status", "short.bin", regs(1, 2, 3))
+print("seeds written under", corpus)
