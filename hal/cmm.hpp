@@ -11,10 +11,10 @@
 
 namespace cmm::hal {
 
-// Lifecycle (ros2_control's habit): configure(block) parses the driver's own JSON block and does no
-// I/O (a bad block throws ConfigError listing every bad key by JSON path); connect() brings the link
-// up so status() is readable; enable() allows motion. A fault drops an enabled machine back to
-// connected: the caller looks at the fault, then enables again.
+// Lifecycle (ros2_control's habit): configure(block) parses the driver's block, no I/O (a bad block
+// throws ConfigError listing every bad key by JSON path); connect() brings the link up so status()
+// is readable; enable() allows motion. A fault drops an enabled machine back to connected (the caller
+// looks at it, enables again); a fault of the link (CommLost, an unanswered request) to configured.
 //
 // Threads: home, move, probe and qualify block until done or faulted, one at a time. status(),
 // stop() and abort() may be called from any other thread while they run. A driver never reports a

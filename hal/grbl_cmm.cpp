@@ -196,7 +196,7 @@ void GrblCmm::connect() {
           return link_down_;
         });
       }
-      const grbl::StatusReport s = query_status("connect");
+      const grbl::StatusReport s = flush_old_line(query_status("connect"));
       if (s.state == "Idle") setup_modes();
       return;
     } catch (const Fault& f) {
@@ -221,6 +221,52 @@ void GrblCmm::disable() {
 void GrblCmm::disconnect() {
   close_port();
   if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+}
+
+void GrblCmm::drop_link() {
+  unanswered_ = true;
+  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+}
+
+grbl::StatusReport GrblCmm::flush_old_line(grbl::StatusReport s) {
+  // Grbl numbers no lines: the ok of a line sent before the link went quiet (a motion still
+  // running, or an answer still on its way) would be read as the next line's. Its outcome is
+  // unknown, so it is stopped, never replayed: a feed hold, then a soft reset once at rest (the
+  // position kept; Grbl drops the line and its answer), then the banner. An idle machine that may
+  // still owe an answer is reset alone; one in Alarm answers nothing late (and a reset there would
+  // release our e-stop input).
+  const bool running = s.state == "Run" || s.state == "Hold" || s.state == "Home" || s.state == "Jog";
+  if (!running && !(unanswered_ && s.state == "Idle")) {
+    unanswered_ = false;
+    return s;
+  }
+  const auto deadline = Clock::now() + seconds(settings_.response_timeout_s + 5);
+  if (s.state == "Run" || s.state == "Jog" || (s.state == "Hold" && s.substate == 1)) {
+    if (s.state != "Hold") send(std::string(1, grbl::kFeedHold), "connect");
+    while (!(s.state == "Hold" && s.substate == 0) && s.state != "Idle" && s.state != "Alarm") {
+      if (Clock::now() > deadline) throw Timeout("connect: the Grbl machine's last line does not come to rest");
+      std::this_thread::sleep_for(seconds(settings_.poll_interval_s));
+      s = query_status("connect");
+    }
+  }
+  {
+    std::lock_guard lock(mutex_);
+    replies_.clear();
+  }
+  send(std::string(1, grbl::kSoftReset), "connect");  // homing (Home) is cut short: it needs $H again
+  {
+    std::unique_lock lock(mutex_);
+    const bool banner = wake_.wait_for(lock, seconds(settings_.response_timeout_s), [&] {
+      for (const auto& line : replies_)
+        if (line.rfind("Grbl ", 0) == 0) return true;
+      return link_down_;
+    });
+    if (!banner || link_down_) throw Timeout("connect: no banner from the Grbl machine after flushing its last line");
+    replies_.clear();
+  }
+  unanswered_ = false;
+  stop_requested_ = false;
+  return query_status("connect");
 }
 
 void GrblCmm::send(const std::string& bytes, const char* what) {
@@ -299,6 +345,7 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
   // ignores a feed hold and stays homed after a soft reset, so the next line would otherwise run.
   if (motion && (aborted_ || stop_requested_))
     throw Aborted(std::string(what) + (aborted_ ? ": aborted" : ": stopped by stop()") + " before the next line");
+  unanswered_ = true;  // until its final answer: ok, error:N, ALARM:N, or the banner of a reset
   send(line + "\n", what);
 
   LineResult result;
@@ -318,7 +365,7 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
       wake_.wait_for(lock, seconds(settings_.poll_interval_s), [&] { return !replies_.empty() || link_down_; });
       if (link_down_) {
         lock.unlock();
-        lifecycle_ = Lifecycle::configured;
+        drop_link();
         throw CommLost(std::string(what) + ": the Grbl link dropped");
       }
       if (!replies_.empty()) {
@@ -338,7 +385,7 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
     const auto now = Clock::now();
     if (reply.empty()) {
       if (unanswered != Clock::time_point{} && now - unanswered > seconds(settings_.status_timeout_s)) {
-        lifecycle_ = Lifecycle::configured;
+        drop_link();
         throw CommLost(std::string(what) + ": no status report within " + std::to_string(settings_.status_timeout_s) +
                        " s: the Grbl link is gone");
       }
@@ -349,8 +396,10 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
           send(std::string(1, grbl::kFeedHold), what);  // whatever it is doing, it should not go on unwatched
         } catch (const Fault&) {
         }
+        // Its ok may still come, and would answer the next line: the link is out of step.
+        drop_link();
         throw Timeout(std::string(what) + ": no answer to \"" + line + "\" within " +
-                      std::to_string(idle ? settings_.response_timeout_s : limit) + " s");
+                      std::to_string(idle ? settings_.response_timeout_s : limit) + " s; the link is down until connect()");
       }
       if (now - last_query >= seconds(settings_.poll_interval_s)) {
         last_query = now;
@@ -359,6 +408,8 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
       }
       continue;
     }
+    if (reply == "ok" || grbl::parse_error(reply) || grbl::parse_alarm(reply) || reply.rfind("Grbl ", 0) == 0)
+      unanswered_ = false;  // the line's final answer
     if (reply == "ok") return result;
     if (auto code = grbl::parse_error(reply)) {
       FaultKind kind = grbl::fault_from_error(*code);
@@ -575,7 +626,11 @@ void GrblCmm::reset() {
       if (line.rfind("Grbl ", 0) == 0) return true;
     return link_down_;
   });
-  if (!banner || link_down_) throw Timeout("reset: no banner from the Grbl machine after a soft reset");
+  if (!banner || link_down_) {
+    lock.unlock();
+    drop_link();  // a banner that comes late would end the next motion as a restart
+    throw Timeout("reset: no banner from the Grbl machine after a soft reset; the link is down until connect()");
+  }
   aborted_ = abort_requested_ = false;
   fault_.reset();
   fault_message_.clear();

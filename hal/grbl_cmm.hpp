@@ -75,6 +75,11 @@ class GrblCmm : public Cmm {
   // Sends one line (counting into Grbl's RX buffer) and waits for its ok; error:N and ALARM:N throw.
   LineResult transact(const std::string& line, const char* what, bool motion);
   [[noreturn]] void alarm(int code, const char* what);
+  // The link is out of step (a line's answer may still come): down to configured until connect().
+  void drop_link();
+  // At connect: a line still running (or whose answer this driver gave up on) is brought to rest
+  // and flushed, so that its ok cannot answer the next line. Returns the status after.
+  grbl::StatusReport flush_old_line(grbl::StatusReport s);
   void setup_modes();
   const TipInfo& active() const;
   Vec3 mpos_of(const Vec3& ball) const { return ball - active().offset; }
@@ -94,6 +99,7 @@ class GrblCmm : public Cmm {
   std::uint64_t status_seq_ = 0;
   bool link_down_ = false;
   std::size_t in_flight_bytes_ = 0;
+  std::atomic<bool> unanswered_{false};  // a line was sent whose final answer never came
 
   std::atomic<bool> stop_requested_{false}, abort_requested_{false}, aborted_{false};
   std::optional<FaultKind> fault_;

@@ -103,6 +103,10 @@ void ModbusCmm::connect() {
   if (!command_ctx_)
     throw CommLost("cannot reach the Modbus machine at " + where + " after " + std::to_string(settings_.connect_attempts) +
                    " attempts: " + modbus_strerror(error));
+  {
+    std::lock_guard lock(down_mutex_);
+    down_.reset();
+  }
   lifecycle_ = Lifecycle::connected;
   try {
     const auto version = read(command_link(), mb::address("protocol_version"), 1, "connect");
@@ -156,6 +160,8 @@ void ModbusCmm::disconnect() {
   if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;  // before the contexts go
   stop_heartbeat();
   close_contexts();
+  std::lock_guard lock(down_mutex_);
+  down_.reset();
 }
 
 void ModbusCmm::heartbeat_loop() {
@@ -166,50 +172,78 @@ void ModbusCmm::heartbeat_loop() {
     try {
       write_single(aux_link(), mb::address("heartbeat"), ++beat, "heartbeat");
     } catch (const std::exception&) {
-      // A missed beat is the point of a heartbeat: the machine notices; the next call reports the link.
+      // A missed beat is the point of a heartbeat: the machine notices; the next call reports the
+      // link, which a beat left unanswered has dropped. Nothing beats on a dropped link.
+      if (lifecycle_ < Lifecycle::connected) return;
     }
     lock.lock();
   }
 }
 
-void ModbusCmm::link_failed(const char* what, int error) {
+void ModbusCmm::request_failed(modbus_t*& ctx, const char* what, int error) {
   const std::string message = std::string(what) + ": " + modbus_strerror(error);
+  FaultKind kind = FaultKind::comm_lost;
+  std::string why = message;
   switch (error) {
-    case ETIMEDOUT:
-      throw Timeout(message + " (no answer within " + std::to_string(settings_.response_timeout_s) + " s)");
-    case EMBBADCRC: case EMBBADDATA: case EMBBADEXC: case EMBMDATA: case EMBBADSLAVE:
-    case EMBXILFUN: case EMBXILADD: case EMBXILVAL: case EMBXSFAIL:
+    case EMBXILFUN: case EMBXILADD: case EMBXILVAL: case EMBXSFAIL: case EMBXACK: case EMBXSBUSY: case EMBXNACK:
+    case EMBXMEMPAR: case EMBXGPATH: case EMBXGTAR: case EMBBADEXC: case EMBBADCRC: case EMBMDATA:
+      // The machine answered this very request (refused it, or the frame came damaged), or libmodbus
+      // refused it before sending: the context is still in step.
+      modbus_flush(ctx);
       throw Protocol(message);
+    case ETIMEDOUT:
+      // The answer may still come, after the next request has gone out: it would be read as that
+      // one's answer (libmodbus's flush drops only what has already arrived).
+      kind = FaultKind::timeout;
+      why = message + " (no answer within " + std::to_string(settings_.response_timeout_s) + " s)";
+      break;
+    case EMBBADDATA: case EMBBADSLAVE:
+      // An answer to another request (a wrong transaction id, function or unit): an earlier one
+      // came late, so this request's own answer is still to come.
+      kind = FaultKind::protocol;
+      why = message + " (an answer that is not this request's)";
+      break;
     default:
-      // The connection itself is gone: a motion's outcome is unknown and nothing is replayed;
-      // connect() brings the link back and re-reads the machine.
-      if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
-      throw CommLost(message);
+      break;  // the connection itself is gone
   }
+  // The link cannot be trusted any more: a motion's outcome is unknown and nothing is replayed;
+  // connect() opens the link afresh and re-reads the machine.
+  modbus_close(ctx);
+  modbus_free(ctx);
+  ctx = nullptr;
+  {
+    std::lock_guard lock(down_mutex_);
+    if (!down_) down_.emplace(kind, why);
+  }
+  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+  throw_fault(kind, why + "; the link is closed until connect()");
+}
+
+void ModbusCmm::link_is_down(const char* what) const {
+  std::lock_guard lock(down_mutex_);
+  if (!down_) throw CommLost(std::string(what) + ": the Modbus link is down");
+  // The fault that dropped the link on another thread (the heartbeat, a status poll) is the one
+  // this call failed for, too.
+  throw_fault(down_->first, std::string(what) + ": the Modbus link is down after " + down_->second);
+}
+
+template <class Request>
+void ModbusCmm::exchange(Link link, const char* what, Request&& request, bool even_if_down) {
+  std::lock_guard lock(*link.mutex);
+  modbus_t*& ctx = *link.ctx;
+  if (!ctx || (!even_if_down && lifecycle_ < Lifecycle::connected)) link_is_down(what);
+  if (request(ctx)) return;
+  request_failed(ctx, what, errno);
 }
 
 std::vector<std::uint16_t> ModbusCmm::read(Link link, int address, int count, const char* what) {
   std::vector<std::uint16_t> regs(static_cast<std::size_t>(count));
-  std::lock_guard lock(*link.mutex);
-  modbus_t* ctx = *link.ctx;
-  if (!ctx || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
-  if (modbus_read_registers(ctx, address, count, regs.data()) != count) {
-    const int error = errno;  // before the flush, which sets its own
-    modbus_flush(ctx);
-    link_failed(what, error);
-  }
+  exchange(link, what, [&](modbus_t* ctx) { return modbus_read_registers(ctx, address, count, regs.data()) == count; });
   return regs;
 }
 
-void ModbusCmm::write_single(Link link, int address, std::uint16_t value, const char* what) {
-  std::lock_guard lock(*link.mutex);
-  modbus_t* ctx = *link.ctx;
-  if (!ctx || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
-  if (modbus_write_register(ctx, address, value) != 1) {
-    const int error = errno;  // before the flush, which sets its own
-    modbus_flush(ctx);
-    link_failed(what, error);
-  }
+void ModbusCmm::write_single(Link link, int address, std::uint16_t value, const char* what, bool even_if_down) {
+  exchange(link, what, [&](modbus_t* ctx) { return modbus_write_register(ctx, address, value) == 1; }, even_if_down);
 }
 
 std::vector<std::uint16_t> ModbusCmm::run_command(std::vector<std::uint16_t> block, const char* what, bool motion) {
@@ -218,15 +252,9 @@ std::vector<std::uint16_t> ModbusCmm::run_command(std::vector<std::uint16_t> blo
   try {
     seq_ = static_cast<std::uint16_t>(seq_ % 65535 + 1);
     block[0] = seq_;
-    {
-      std::lock_guard lock(command_mutex_);
-      if (!command_ctx_ || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Modbus link is down");
-      if (modbus_write_registers(command_ctx_, mb::kCommandFirst, mb::kCommandCount, block.data()) != mb::kCommandCount) {
-        const int error = errno;  // before the flush, which sets its own
-        modbus_flush(command_ctx_);
-        link_failed(what, error);
-      }
-    }
+    exchange(command_link(), what, [&](modbus_t* ctx) {
+      return modbus_write_registers(ctx, mb::kCommandFirst, mb::kCommandCount, block.data()) == mb::kCommandCount;
+    });
     const auto deadline = Clock::now() + std::chrono::duration<double>(settings_.motion_timeout_s);
     for (;;) {
       auto regs = read(command_link(), mb::kStatusFirst, mb::kStatusCount, what);
@@ -247,9 +275,9 @@ std::vector<std::uint16_t> ModbusCmm::run_command(std::vector<std::uint16_t> blo
   } catch (const Fault& fault) {
     if (motion && lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
     // A fault of the link, not of the machine: the command may be running unwatched. Stop it if any
-    // context still reaches it (the heartbeat stops it otherwise).
+    // context still reaches it, even with the link dropped (the heartbeat stops it otherwise).
     if (motion && !echoed_fault) try {
-        stop();
+        write_single(aux_link(), mb::address("urgent"), mb::Urgent::stop, what, true);
       } catch (const std::exception&) {
       }
     throw;

@@ -6,13 +6,16 @@
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <modbus/modbus.h>
 
 #include "hal/cmm.hpp"
+#include "hal/fault.hpp"
 
 namespace cmm::hal {
 
@@ -38,6 +41,11 @@ ModbusSettings modbus_settings_from_json(const nlohmann::json& block);  // throw
 // Threads: the motion calls use one context; status(), stop() and abort() use a second one (TCP)
 // so they answer while a motion runs. On RTU there is one line and one context, shared under a
 // lock that the motion thread drops between polls.
+//
+// A request left unanswered (Timeout) may still be answered later, and a reply that belongs to
+// another request (Protocol) shows that one already was: either way the context is out of step, so
+// the driver closes the link and drops to configured, as for CommLost; connect() opens it afresh and
+// re-reads the machine.
 class ModbusCmm : public Cmm {
  public:
   ModbusCmm() = default;
@@ -69,9 +77,16 @@ class ModbusCmm : public Cmm {
   modbus_t* open_context() const;
   void close_contexts();
   void require(Lifecycle at_least, const char* what) const;
-  [[noreturn]] void link_failed(const char* what, int error);  // maps an errno to CommLost, Timeout or Protocol
+  // One request on `link` under its lock: `request(ctx)` is true when it got its answer. With
+  // `even_if_down` it is sent on a context still open after the link was dropped (the last stop).
+  template <class Request>
+  void exchange(Link link, const char* what, Request&& request, bool even_if_down = false);
+  // Maps a failed request's errno to Timeout, Protocol or CommLost; closes `ctx` and drops the link
+  // unless the machine answered this very request (an exception reply, a bad CRC).
+  [[noreturn]] void request_failed(modbus_t*& ctx, const char* what, int error);
+  [[noreturn]] void link_is_down(const char* what) const;  // the fault that took the link down, again
   std::vector<std::uint16_t> read(Link link, int address, int count, const char* what);
-  void write_single(Link link, int address, std::uint16_t value, const char* what);
+  void write_single(Link link, int address, std::uint16_t value, const char* what, bool even_if_down = false);
   // Writes one command block, waits for its echo and returns the status block read with it.
   std::vector<std::uint16_t> run_command(std::vector<std::uint16_t> block, const char* what, bool motion);
   MachineStatus decode_status(const std::vector<std::uint16_t>& regs) const;
@@ -86,6 +101,8 @@ class ModbusCmm : public Cmm {
   modbus_t* command_ctx_ = nullptr;
   modbus_t* aux_ctx_ = nullptr;  // null on RTU
   std::mutex command_mutex_, aux_mutex_;
+  mutable std::mutex down_mutex_;
+  std::optional<std::pair<FaultKind, std::string>> down_;  // why the link was dropped, until connect()
   std::uint16_t seq_ = 0;
   std::vector<std::string> tip_ids_;  // the machine's tip table, read at connect and by info()
   mutable std::mutex tips_mutex_;     // info() writes tip_ids_ while status() may read it

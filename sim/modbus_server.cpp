@@ -243,7 +243,9 @@ void ModbusServer::refresh() {
   r[mb::address("flags")] = static_cast<std::uint16_t>((s.homed ? mb::homed : 0) | (s.moving ? mb::moving : 0) |
                                                        (s.estop ? mb::estop : 0) | (s.aborted ? mb::aborted : 0) |
                                                        (busy_ ? mb::busy : 0) | (stale_ ? mb::heartbeat_stale : 0));
-  r[mb::address("fault_code")] = s.fault ? mb::to_code(*s.fault) : 0;
+  // A command the server ended before the machine ran it (stopped, or a stale heartbeat, before it
+  // started; refused while another ran) leaves no fault on the machine, yet its fault stands too.
+  r[mb::address("fault_code")] = s.fault ? mb::to_code(*s.fault) : done_result_;
   r[mb::address("done_seq")] = done_seq_;
   r[mb::address("done_result")] = done_result_;
   put_vec(r + mb::address("position_x"), s.position);

@@ -1,12 +1,15 @@
 // Crash safety and job control of cmmd (docs/api.md, jobs; DESIGN.md, Files): cmmd SIGKILLed at
-// seeded moments of one job, cmm-sim killed mid-move, a torn journal line, pause, stop and cancel.
+// seeded moments of one job, cmm-sim killed or frozen mid-move, a torn journal line, pause, stop and
+// cancel.
 #include <gtest/gtest.h>
+#include <modbus/modbus.h>
 
 #include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -15,6 +18,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -23,6 +27,7 @@
 #include "daemon/touch_journal.hpp"
 #include "geometry/analytic_parts.hpp"
 #include "geometry/true_edge_distance.hpp"
+#include "hal/modbus_map.hpp"
 #include "sim/sim_config.hpp"
 
 namespace cmm {
@@ -419,6 +424,133 @@ TEST(CmmdCrash, CmmSimKilledMidMovePausesTheJobWithCommLostAndResumeOnTheSamePor
   d.client().call("job.resume", {{"job", id}});
   testing::wait_for_job(d.client(), id, {"done"}, wait_s);
   const Finished f = finished(d.client(), d.job_folder(id), id);
+  expect_every_touch_once(f);
+  expect_on_the_true_edges(f.result);
+  EXPECT_EQ(d.terminate(), 0);
+}
+
+// Where cmm-sim's ball is, read from the machine itself over a Modbus connection of the test's own.
+geometry::Vec3 sim_position(int port) {
+  modbus_t* ctx = modbus_new_tcp("127.0.0.1", port);
+  std::uint16_t r[hal::modbus::kStatusCount] = {};
+  const bool read = modbus_connect(ctx) == 0 &&
+                    modbus_read_registers(ctx, hal::modbus::kStatusFirst, hal::modbus::kStatusCount, r) ==
+                        hal::modbus::kStatusCount;
+  modbus_close(ctx);
+  modbus_free(ctx);
+  if (!read) throw std::runtime_error("cannot read cmm-sim's status on port " + std::to_string(port));
+  const std::uint16_t* p = r + hal::modbus::address("position_x");
+  return geometry::Vec3(hal::modbus::get_i32(p), hal::modbus::get_i32(p + 2), hal::modbus::get_i32(p + 4)) * 1e-6;
+}
+
+// From a resume until the job makes its next touch, machine.status sampled as fast as cmmd answers:
+// every position below the clearance plane lies on the search line of the touch that was cut short
+// (a retract longer than the travel to the trigger ends just behind its start), or straight above its
+// start (the ways in and out the plan checked), or straight above where the ball stood at the pause
+// when that was not between the start and the part (it came down that way, or is just behind the
+// start). A ball that rose straight from inside the touch, or went anywhere else first, is caught if
+// a sample lands there.
+void expect_leaves_along_the_search_line(Cmmd& d, int job, const json& touch_file, const geometry::Vec3& paused_at) {
+  const double clearance_z = clearance_of(d.job_folder(job));
+  const geometry::Vec3 start = vec(touch_file.at("start")), direction = vec(touch_file.at("direction"));
+  const auto off_line = [](const geometry::Vec3& p, const geometry::Vec3& from, const geometry::Vec3& dir) {
+    const geometry::Vec3 v = p - from;
+    return (v - v.dot(dir) * dir).norm();
+  };
+  const auto off_ray = [&](const geometry::Vec3& p, const geometry::Vec3& from, const geometry::Vec3& dir) {
+    return (p - from).dot(dir) < 0 ? (p - from).norm() : off_line(p, from, dir);
+  };
+  const geometry::Vec3 up = geometry::Vec3::UnitZ();
+  const bool paused_off = off_ray(paused_at, start, direction) > 1e-3 && off_ray(paused_at, start, up) > 1e-3;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_s);
+  int samples = 0;
+  for (;;) {
+    if (const std::optional<json> n = d.watch().wait_notification(0)) {
+      if (touched(job)(*n)) break;
+      const json& p = n->at("params");
+      if (n->at("method") == "job.state" && p.at("job") == job && p.at("state") != "planning" &&
+          p.at("state") != "registering" && p.at("state") != "probing")
+        FAIL() << "the resumed job became " << p.at("state") << " (" << p.value("reason", "") << ") before a touch";
+    }
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "no touch after the resume";
+    const json s = d.status();
+    if (!s.contains("position")) continue;  // the link is not up yet
+    const geometry::Vec3 at = vec(s["position"]);
+    if (at.z() > clearance_z - 1e-3) continue;
+    ++samples;
+    const double off = std::min({off_line(at, start, direction), off_ray(at, start, up),
+                                 paused_off ? off_ray(at, paused_at, up) : HUGE_VAL});
+    ASSERT_LT(off, 1e-3) << "after the resume the ball was at (" << at.transpose() << "), off the search line from ("
+                         << start.transpose() << ") along (" << direction.transpose()
+                         << ") and not straight above its start; it stopped at (" << paused_at.transpose() << ")";
+  }
+  std::printf("%d positions below the clearance plane sampled on the way out and in again\n", samples);
+}
+
+// cmm-sim frozen (SIGSTOP) inside a touch for longer than the driver's response timeout and its own
+// heartbeat watch, then let go (SIGCONT), twice: the job pauses with Timeout each time. The first time
+// machine.reset reconnects, leaves the touch and resets before job.resume; the second time job.resume
+// reconnects itself and leaves the touch along its search line. The answers the frozen machine still
+// owed arrive late and are never read as answers to later requests; every planned touch is made once.
+TEST(CmmdCrash, CmmSimFrozenMidTouchPausesTheJobWithTimeoutAndResetAndResumeFinishIt) {
+  const Scratch dir("simfreeze");
+  const auto scan = testing::sample_scan(dir.path / "scan");
+  std::mt19937 rng(kill_seed);
+  std::printf("kill seed %u\n", kill_seed);
+  testing::SimulatorProcess sim(dir.path / "scan" / "sim.json", wall_time_scale);
+  // Short timeouts keep the test quick: the driver gives up on an answer after 0.5 s, the machine
+  // brakes when the heartbeat is 1 s old; the freeze outlasts both.
+  json machine = testing::modbus_block(sim.port);
+  machine.update({{"response_timeout_s", 0.5}, {"heartbeat_s", 0.1}, {"heartbeat_timeout_s", 1}});
+  constexpr auto freeze = std::chrono::milliseconds(1500);
+  Cmmd d(dir.path / "cmmd", machine, machine_description());
+  d.start();
+  const int id = testing::submit_job(d.client(), scan, job_request(dir.path / "scan"));
+  const std::filesystem::path folder = d.job_folder(id);
+  const int total = total_of(await_job(d.watch(), id, "probing", progress_at_least(id, "probing", 0)));
+  const std::vector<int> program = program_order(folder);
+  for (const bool reset_first : {true, false}) {
+    const int at = uniform(rng, total * (reset_first ? 1 : 3) / 5 + 1, total * (reset_first ? 2 : 4) / 5);
+    await_job(d.watch(), id, "touch " + std::to_string(at), progress_at_least(id, "probing", at));
+    const json s = await_moving_below(d.client(), clearance_of(folder));
+    sim.process.signal(SIGSTOP);
+    const auto frozen = std::chrono::steady_clock::now();
+    std::printf("froze cmm-sim after %d of %d touches, the ball moving at z = %.3f\n", at, total,
+                s["position"][2].get<double>());
+    await_job(d.watch(), id, "paused", state_is(id, "paused"));  // the driver gives up while it is frozen
+    std::this_thread::sleep_until(frozen + freeze);
+    sim.process.signal(SIGCONT);
+
+    const json paused = d.client().call("job.get", {{"job", id}});
+    ASSERT_TRUE(paused.at("fault").is_object()) << paused.dump();
+    EXPECT_EQ(paused["fault"].at("kind"), "Timeout") << paused.dump();
+    const std::optional<json> touch_file = d.touch_in_progress();
+    ASSERT_TRUE(touch_file) << "the touch the freeze cut short is not recorded";
+    const std::vector<int> journal = testing::journal_touch_ids(folder);
+    expect_program_prefix(journal, program, "after the freeze");
+    EXPECT_EQ(program_index(folder, *touch_file), static_cast<int>(journal.size()))
+        << "the touch cut short is not the first one missing from touches.jsonl";
+
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the heartbeat's brake, in machine time
+    const geometry::Vec3 paused_at = sim_position(sim.port);
+    if (reset_first) {
+      try {
+        d.client().call("machine.reset", json::object(), wait_s);
+        EXPECT_FALSE(d.touch_in_progress()) << "machine.reset did not take the ball out of the touch first";
+        EXPECT_EQ(d.status().at("link"), "up");
+      } catch (const daemon::RpcError& e) {
+        ADD_FAILURE() << "machine.reset after the freeze: " << e.what() << " " << e.data().dump();
+      }
+      d.client().call("job.resume", {{"job", id}});
+    } else {
+      d.client().call("job.resume", {{"job", id}});
+      expect_leaves_along_the_search_line(d, id, *touch_file, paused_at);
+    }
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+  const json record = testing::wait_for_job(d.client(), id, {"done", "paused"}, wait_s);
+  ASSERT_EQ(record.at("state"), "done") << record.dump();
+  const Finished f = finished(d.client(), folder, id);
   expect_every_touch_once(f);
   expect_on_the_true_edges(f.result);
   EXPECT_EQ(d.terminate(), 0);
