@@ -9,7 +9,6 @@
 #include <array>
 #include <cctype>
 #include <cerrno>
-#include <cstring>
 
 #include "daemon/atomic_file.hpp"
 #include "daemon/base64.hpp"
@@ -51,7 +50,7 @@ std::uint64_t size_or_zero(const fs::path& file) {
 }
 
 [[noreturn]] void fail(const fs::path& file, const std::string& step) {
-  throw geometry::FileError::whole(file, step + ": " + std::strerror(errno));
+  throw geometry::FileError::system(file, step, errno);
 }
 
 // Writes `bytes` at `offset` (cutting whatever lay beyond it) and makes it durable.

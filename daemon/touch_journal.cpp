@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -32,7 +31,7 @@ JournalEntry from_json(const nlohmann::json& j) {
 }
 
 [[noreturn]] void fail(const std::filesystem::path& file, const std::string& step) {
-  throw geometry::FileError::whole(file, step + ": " + std::strerror(errno));
+  throw geometry::FileError::system(file, step, errno);
 }
 }  // namespace
 

@@ -1,6 +1,8 @@
 // Formats FileError messages as "file: where: what".
 #include "geometry/file_error.hpp"
 
+#include <cstring>
+
 namespace cmm::geometry {
 
 FileError FileError::at_line(const std::filesystem::path& file, std::size_t line, const std::string& message) {
@@ -13,6 +15,10 @@ FileError FileError::at_byte(const std::filesystem::path& file, std::uint64_t of
 
 FileError FileError::whole(const std::filesystem::path& file, const std::string& message) {
   return FileError(file, file.string() + ": " + message);
+}
+
+FileError FileError::system(const std::filesystem::path& file, const std::string& step, int error_number) {
+  return FileError(file, file.string() + ": " + step + ": " + std::strerror(error_number), error_number);
 }
 
 }  // namespace cmm::geometry
