@@ -8,6 +8,7 @@
 #include "daemon/job_planning.hpp"
 #include "daemon/job_result.hpp"
 #include "daemon/rpc_error.hpp"
+#include "daemon/storage_error.hpp"
 #include "daemon/touch_journal.hpp"
 #include "daemon/touch_motion.hpp"
 #include "hal/fault.hpp"
@@ -147,9 +148,9 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
     // touches aside, start the journal and the plan afresh.
     const std::filesystem::path folder = env_.store.folder(id_);
     const std::string stamp = hal::utc_now();
+    if (std::filesystem::exists(folder / "touches.jsonl"))  // throws when it cannot: the old touches must not stay
+      std::filesystem::rename(folder / "touches.jsonl", folder / ("touches.before-" + stamp + ".jsonl"));
     std::error_code ignored;
-    if (std::filesystem::exists(folder / "touches.jsonl"))
-      std::filesystem::rename(folder / "touches.jsonl", folder / ("touches.before-" + stamp + ".jsonl"), ignored);
     std::filesystem::remove(folder / "plan.json", ignored);
     sync_folder(folder);
   }
@@ -197,13 +198,52 @@ void JobRunner::finish_touch_safely(bool clear_of_part) {
   }
 }
 
+// Every touch of plan.json in the journal, with the registration kept: nothing is left to measure.
+bool JobRunner::probing_complete() const {
+  try {
+    const std::optional<std::string> plan = env_.store.read_file(id_, "plan.json");
+    if (!plan || !env_.store.read_file(id_, "registration.json")) return false;
+    std::set<int> made;
+    for (const JournalEntry& e : recover_journal(env_.store.folder(id_) / "touches.jsonl").entries) made.insert(e.touch_id);
+    const nlohmann::json program = nlohmann::json::parse(*plan).at("program");
+    for (const nlohmann::json& t : program)
+      if (!made.contains(t.at("id").get<int>())) return false;
+    return !program.empty();
+  } catch (const std::exception&) {
+    return false;  // whatever is wrong with the files, the ordinary run says so
+  }
+}
+
+// Touches a full disk kept out of the journal, in the order they were made, before anything else
+// of this run; each is reported (job.touch) once it is kept.
+void JobRunner::journal_unjournaled() {
+  if (unjournaled_.empty()) return;
+  const std::filesystem::path file = env_.store.folder(id_) / "touches.jsonl";
+  std::set<int> kept;
+  for (const JournalEntry& e : recover_journal(file).entries) kept.insert(e.touch_id);
+  TouchJournal journal(file);
+  while (!unjournaled_.empty()) {
+    const JournalEntry e = unjournaled_.front();
+    if (!kept.contains(e.touch_id)) {
+      journal.append(e);
+      sink_.touched(e.touch_id, e.result);
+    }
+    unjournaled_.erase(unjournaled_.begin());
+  }
+}
+
 void JobRunner::run(bool rehome, bool reregister) {
   const std::string started = hal::utc_now();
   try {
     sink_.state(JobState::planning, "", std::nullopt);
+    journal_unjournaled();
     const ReferenceModel model = load_reference_model(env_.models.resolve(request_.model), request_);
     check_control();
-    prepare_machine(rehome);
+    // Every planned touch made (the result could not be written): the result is made again from the
+    // journal, with no motion at all, so the machine is only asked for its description.
+    const bool probed = !reregister && probing_complete();
+    if (probed) env_.machine.bring_up();
+    else prepare_machine(rehome);
     const double clock0_s = env_.machine.cmm().status().t_s;
     const hal::MachineInfo info = env_.machine.cmm().info();
     const hal::TipInfo tip = active_tip(info);
@@ -214,7 +254,7 @@ void JobRunner::run(bool rehome, bool reregister) {
         t.ball_radius_mm = reg.file.value("radius_mm", t.ball_radius_mm);
         machine.active_tip = t.id;
       }
-    if (machine.active_tip != info.active_tip)
+    if (!probed && machine.active_tip != info.active_tip)
       throw Held{JobState::paused, "job " + std::to_string(id_) + " was registered with tip " + machine.active_tip +
                                        " but the machine's active tip is " + info.active_tip +
                                        ": select it again, or resume with reregister"};
@@ -253,10 +293,12 @@ void JobRunner::run(bool rehome, bool reregister) {
       const hal::TouchResult r = touch(t, clearance, machine.probe_speed_mm_s);
       try {
         journal.append({t.id, r});
-      } catch (const std::exception& e) {
-        // The touch is made but not kept: hold the job (a full disk is the operator's to clear);
-        // the resume makes this touch again, so the result still holds it exactly once.
-        throw Held{JobState::paused, std::string("the touch journal could not be written: ") + e.what()};
+      } catch (const std::exception&) {
+        // The touch is made but not kept (a full disk): it waits here and is journalled first when
+        // the job goes on, so it is neither lost nor made twice (unless cmmd stops meanwhile: then
+        // the resume makes it again). The job holds, storage full (below).
+        unjournaled_.push_back({t.id, r});
+        throw;
       }
       results[t.id] = r;
       remaining_s -= planned_s[t.id];
@@ -266,7 +308,7 @@ void JobRunner::run(bool rehome, bool reregister) {
     }
     // Back up to the travel plane: a finished job leaves the probe clear of the part.
     const hal::Vec3 at = env_.machine.cmm().status().position;
-    if (at.z() < clearance) env_.machine.cmm().move({hal::Vec3(at.x(), at.y(), clearance), 0});
+    if (!probed && at.z() < clearance) env_.machine.cmm().move({hal::Vec3(at.x(), at.y(), clearance), 0});
 
     const JobResultInputs inputs{.model = model,
                                  .plan = plan,
@@ -304,7 +346,12 @@ void JobRunner::run(bool rehome, bool reregister) {
   } catch (const hal::StateError& e) {
     sink_.state(JobState::paused, std::string("machine not ready: ") + e.what(), JobFault{"State", e.what()});
   } catch (const std::exception& e) {
-    sink_.state(JobState::failed, e.what(), JobFault{"Internal", e.what()});
+    // A file of the job that cannot be written (a full disk) holds the job: what it measured is
+    // kept, and job.resume goes on once the operator has made room.
+    if (const auto failure = storage_failure(e))
+      sink_.state(JobState::paused, failure->hold_reason(), JobFault{failure->fault_kind(), e.what()});
+    else
+      sink_.state(JobState::failed, e.what(), JobFault{"Internal", e.what()});
   }
 }
 

@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_record.hpp"
@@ -13,6 +14,7 @@
 #include "daemon/job_store.hpp"
 #include "daemon/machine_link.hpp"
 #include "daemon/model_store.hpp"
+#include "daemon/touch_journal.hpp"
 #include "hal/motion.hpp"
 #include "planner/touch.hpp"
 
@@ -55,6 +57,8 @@ class JobRunner {
  private:
   struct Registration;
   void prepare_machine(bool rehome);
+  bool probing_complete() const;
+  void journal_unjournaled();
   Registration registration(bool reregister, double radius_mm, const std::string& tip);
   Registration measure_plate(double radius_mm);
   void check_control() const;
@@ -69,6 +73,9 @@ class JobRunner {
   JobRequest request_;
   JobControl& control_;
   JobSink sink_;
+  // Touches made but not journalled (the journal could not be written): journalled first when the
+  // job goes on, so a full disk loses no touch and makes none twice.
+  std::vector<JournalEntry> unjournaled_;
 };
 
 }  // namespace cmm::daemon

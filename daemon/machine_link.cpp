@@ -36,9 +36,9 @@ MachineLink::MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, st
 
 void MachineLink::enter_touch(const SearchLine& line) {
   const std::lock_guard lock(touch_mutex_);
-  touch_ = line;
   if (!touch_file_.empty())
     write_atomically(touch_file_, nlohmann::json{{"start", vec(line.start)}, {"direction", vec(line.direction)}}.dump());
+  touch_ = line;
 }
 
 void MachineLink::left_touch() {

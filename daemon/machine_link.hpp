@@ -62,7 +62,8 @@ class MachineLink {
   std::optional<std::string> holder() const;
 
   // Recorded (durably, with a touch file) before a touch's first motion, cleared once the ball is
-  // back at its start.
+  // back at its start. When the touch file cannot be written (a full disk: geometry::FileError),
+  // nothing is recorded and the touch must not begin.
   void enter_touch(const SearchLine& line);
   void left_touch();
   std::optional<SearchLine> touch_in_progress() const;
