@@ -25,6 +25,7 @@ nlohmann::json normalized(nlohmann::json params, const JobRequest& r) {
   params["spacing_mm"] = r.spacing_mm;
   params["feature_angle_deg"] = r.feature_angle_deg;
   params["seed"] = r.seed;
+  params["requalify"] = r.requalify;
   nlohmann::json& reg = params["registration"];
   if (reg.contains("measure_plate")) reg["measure_plate"]["plate"] = planner::to_json(r.plate);
   else reg["plate"] = planner::to_json(r.plate);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -11,6 +12,7 @@
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_record.hpp"
 #include "daemon/job_request.hpp"
+#include "daemon/job_qualifications.hpp"
 #include "daemon/job_store.hpp"
 #include "daemon/machine_link.hpp"
 #include "daemon/model_store.hpp"
@@ -59,6 +61,10 @@ class JobRunner {
   void prepare_machine(bool rehome);
   bool probing_complete() const;
   void journal_unjournaled();
+  void load_qualifications();
+  hal::MachineInfo check_qualification(hal::MachineInfo info, bool reregister);
+  void take_on(const hal::TipInfo& tip, const std::string& source);
+  void requalify(const std::string& tip_id);
   Registration registration(bool reregister, double radius_mm, const std::string& tip);
   Registration measure_plate(double radius_mm);
   void check_control() const;
@@ -76,6 +82,8 @@ class JobRunner {
   // Touches made but not journalled (the journal could not be written): journalled first when the
   // job goes on, so a full disk loses no touch and makes none twice.
   std::vector<JournalEntry> unjournaled_;
+  std::optional<JobQualifications> qualifications_;  // qualifications.json, once read or made
+  std::uint64_t checked_connections_ = 0;            // MachineLink::connections() at the last check
 };
 
 }  // namespace cmm::daemon

@@ -27,6 +27,7 @@ JournalEntry from_json(const nlohmann::json& j) {
   e.result.travel_mm = j.at("travel_mm").get<double>();
   e.result.t_s = j.at("t_s").get<double>();
   e.result.tip_id = j.at("tip").get<std::string>();
+  e.qualification = j.value("q", 0);
   return e;
 }
 
@@ -39,7 +40,8 @@ std::string to_json_line(const JournalEntry& e) {
   // nlohmann prints the shortest text that reads back as the same double: a touch read back is the
   // very number that was measured.
   nlohmann::json j = {{"touch", e.touch_id},        {"contact", e.result.contact}, {"centre", vec(e.result.centre)},
-                      {"travel_mm", e.result.travel_mm}, {"t_s", e.result.t_s},     {"tip", e.result.tip_id}};
+                      {"travel_mm", e.result.travel_mm}, {"t_s", e.result.t_s},     {"tip", e.result.tip_id},
+                      {"q", e.qualification}};
   return j.dump();
 }
 

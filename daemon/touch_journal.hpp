@@ -11,10 +11,13 @@
 
 namespace cmm::daemon {
 
-// One journal line: which planned touch it was and what the machine reported.
+// One journal line: which planned touch it was, what the machine reported, and under which of the
+// job's tip qualifications it was made (an index into qualifications.json; lines written before
+// there was one read as 0).
 struct JournalEntry {
   int touch_id = -1;       // the plan's touch id
   hal::TouchResult result;
+  int qualification = 0;
 };
 
 std::string to_json_line(const JournalEntry& entry);  // one line, no newline

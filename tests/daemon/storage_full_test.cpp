@@ -43,6 +43,7 @@ JournalEntry entry(int id) {
   e.result.travel_mm = 4.000731;
   e.result.t_s = 12.345678901234 * id;
   e.result.tip_id = "T1";
+  e.qualification = id / 10;
   return e;
 }
 
@@ -105,6 +106,7 @@ TEST(StorageFull, AJournalLineThatDoesNotFitIsTakenBackWhole) {
   for (int i = 0; i <= made; ++i) {
     EXPECT_EQ(r.entries[static_cast<std::size_t>(i)].touch_id, i);
     EXPECT_EQ(r.entries[static_cast<std::size_t>(i)].result.centre, entry(i).result.centre);
+    EXPECT_EQ(r.entries[static_cast<std::size_t>(i)].qualification, entry(i).qualification);
   }
 }
 
