@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
   std::string model, corners, measure, name, format = "json", output, tip;
   double scale = 1, delta = 0.2, spacing = 2, angle = 30;
   std::uint64_t seed = 1;
-  bool watch_job = false, reregister = false;
+  bool watch_job = false, reregister = false, requalify = false;
   int id = 0;
 
   auto add_job_options = [&](CLI::App* c) {
@@ -185,6 +185,7 @@ int main(int argc, char** argv) {
   CLI::App* submit = app.add_subcommand("submit", "upload a model and queue a job");
   add_job_options(submit);
   submit->add_flag("-w,--watch", watch_job, "follow the job with a progress bar until it ends");
+  submit->add_flag("--requalify", requalify, "qualify the tip again by itself if the machine loses its qualification");
   CLI::App* preview = app.add_subcommand("preview", "plan a job and dry-run it on a simulator of the reference mesh");
   add_job_options(preview);
   app.add_subcommand("status", "the machine and the running job");
@@ -237,7 +238,9 @@ int main(int argc, char** argv) {
         show(client.call("plan.preview", request, 600));
         return 0;
       }
-      const json record = client.call("job.submit", request, 120);
+      json submitted = request;
+      if (requalify) submitted["requalify"] = true;
+      const json record = client.call("job.submit", submitted, 120);
       id = record.at("id").get<int>();
       std::printf("job %d queued (%s)\n", id, ref.c_str());
       std::fflush(stdout);  // before the progress on stderr

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/rpc_error.hpp"
+#include "daemon/storage_error.hpp"
 #include "hal/utc_time.hpp"
 
 namespace cmm::daemon {
@@ -24,6 +25,7 @@ nlohmann::json normalized(nlohmann::json params, const JobRequest& r) {
   params["spacing_mm"] = r.spacing_mm;
   params["feature_angle_deg"] = r.feature_angle_deg;
   params["seed"] = r.seed;
+  params["requalify"] = r.requalify;
   nlohmann::json& reg = params["registration"];
   if (reg.contains("measure_plate")) reg["measure_plate"]["plate"] = planner::to_json(r.plate);
   else reg["plate"] = planner::to_json(r.plate);
@@ -93,24 +95,31 @@ JobManager::Job& JobManager::find(int id) {
 
 const JobManager::Job& JobManager::find(int id) const { return const_cast<JobManager*>(this)->find(id); }
 
-void JobManager::save_and_notify(const Job& job) {
-  try {
-    store_.save(job.record);
-  } catch (const std::exception& e) {
-    spdlog::error("job {}: cannot save its record: {}", job.record.id, e.what());
-  }
+void JobManager::notify_state(const Job& job) {
   notify_("job", "job.state",
           {{"job", job.record.id}, {"state", to_string(job.record.state)}, {"reason", job.record.reason}});
 }
 
 void JobManager::set_state(Job& job, JobState state, const std::string& reason, const std::optional<JobFault>& fault) {
-  job.record.state = state;
-  job.record.reason = reason;
-  job.record.fault = fault;
-  job.record.updated = hal::utc_now();
-  if (!is_running(state)) job.record.progress.eta_s = 0;
+  JobRecord next = job.record;
+  next.state = state;
+  next.reason = reason;
+  next.fault = fault;
+  next.updated = hal::utc_now();
+  if (!is_running(state)) next.progress.eta_s = 0;
+  try {
+    store_.save(next);
+  } catch (const std::exception& e) {
+    spdlog::error("job {}: cannot save its record as {}: {}", job.record.id, to_string(state), e.what());
+    // A job neither goes on nor ends done on a record job.json does not hold: the error goes back
+    // to the runner, which holds the job (paused, storage full) instead. A hold or any other end is
+    // kept as it is: job.json then still says the last state saved, which a restart reads as
+    // interrupted if it was a running one, so the job stays resumable and loses nothing.
+    if (is_running(state) || state == JobState::done) throw;
+  }
+  job.record = std::move(next);
   spdlog::info("job {}: {}{}{}", job.record.id, to_string(state), reason.empty() ? "" : ": ", reason);
-  save_and_notify(job);
+  notify_state(job);
 }
 
 JobSink JobManager::sink_for(Job& job) {
@@ -197,7 +206,7 @@ nlohmann::json JobManager::submit(const nlohmann::json& params) {
   std::lock_guard lock(mutex_);
   if (stopping_) throw RpcError(rpc_code::shutting_down, "cmmd is stopping");
   auto job = std::make_unique<Job>();
-  job->record = store_.create(normalized(params, request), request.name, request.model);
+  job->record = refusing_on_full_disk([&] { return store_.create(normalized(params, request), request.name, request.model); });
   job->request = request;
   const int id = job->record.id;
   jobs_[id] = std::move(job);

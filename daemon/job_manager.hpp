@@ -62,7 +62,7 @@ class JobManager {
   Job& find(int id);
   const Job& find(int id) const;
   void set_state(Job& job, JobState state, const std::string& reason, const std::optional<JobFault>& fault);
-  void save_and_notify(const Job& job);
+  void notify_state(const Job& job);
   JobSink sink_for(Job& job);
 
   const DaemonConfig& config_;

@@ -78,7 +78,7 @@ PlateMeasurement plate_measurement(const nlohmann::json& j, const planner::Plate
 JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& config, bool registration_optional) {
   if (!params.is_object()) throw_invalid_param("", "the job request must be an object");
   static const std::set<std::string> known = {"model", "name", "scale", "delta_mm", "spacing_mm",
-                                              "feature_angle_deg", "seed", "registration"};
+                                              "feature_angle_deg", "seed", "requalify", "registration"};
   for (const auto& [key, value] : params.items())
     if (!known.contains(key)) throw_invalid_param("/" + key, "unknown field");
   JobRequest r;
@@ -97,6 +97,10 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   r.spacing_mm = number(params, "spacing_mm", config.job.spacing_mm, 0.05, 100);
   r.feature_angle_deg = number(params, "feature_angle_deg", config.job.feature_angle_deg, 1, 179);
   r.seed = static_cast<std::uint64_t>(number(params, "seed", 1, 0, 9007199254740992.0));
+  if (params.contains("requalify")) {
+    if (!params["requalify"].is_boolean()) throw_invalid_param("/requalify", "must be true or false");
+    r.requalify = params["requalify"].get<bool>();
+  }
   r.plate = config.plate;
   if (registration_optional && !params.contains("registration")) return r;
 

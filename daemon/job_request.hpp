@@ -29,6 +29,9 @@ struct JobRequest {
   double spacing_mm = 2;
   double feature_angle_deg = 30;
   std::uint64_t seed = 1;
+  // When the tip's qualification changed or vanished under the job (a controller restart): true,
+  // the job qualifies the tip itself and goes on; false (the default), it pauses for the operator.
+  bool requalify = false;
   planner::Plate plate;
   // Exactly one of these: corner pairs given, or the plate measured on the machine.
   std::optional<planner::RegistrationInput> given;

@@ -1,6 +1,8 @@
 #include "daemon/job_result.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "daemon/sha256.hpp"
 #include "planner/measured_cloud.hpp"
@@ -19,18 +21,41 @@ std::string sha256_of(std::string_view text) {
 }
 
 // What a result needs to be traced back to: which software, config, machine, tip and inputs.
-nlohmann::json traceability(const JobResultInputs& in) {
+nlohmann::json traceability(const JobResultInputs& in, double radius_mm) {
   std::string config_hash;
   try {
     config_hash = sha256_hex_of_file(in.config.source);
   } catch (const std::exception&) {
     config_hash = "";  // cmmd started from defaults, not a file
   }
-  nlohmann::json qualification = nullptr;
-  if (in.tip.qualification)
-    qualification = {{"time_utc", in.tip.qualification->time_utc},
-                     {"ball_radius_mm", in.tip.qualification->ball_radius_mm},
-                     {"residual_rms_mm", in.tip.qualification->residual_rms_mm}};
+  nlohmann::json tip = {{"id", in.tip.id}, {"qualification", nullptr}, {"qualifications", nlohmann::json::array()}};
+  if (in.qualifications) {
+    // The first is the one the job was planned and registered with; every one with the touches it covers.
+    const nlohmann::json file = to_json(*in.qualifications);
+    tip["id"] = in.qualifications->tip;
+    tip["qualification"] = file["qualifications"][0]["qualification"];
+    tip["qualifications"] = file["qualifications"];
+    for (nlohmann::json& q : tip["qualifications"]) {
+      q["job_touches"] = 0;
+      q["first_touch"] = q["last_touch"] = nullptr;
+      // What touches_at_radius moves its touches by; the first's are the plan's own.
+      q["radius_adjustment_mm"] = q["index"] == 0 ? 0.0 : q["ball_radius_mm"].get<double>() - radius_mm;
+    }
+    for (const planner::Touch& t : in.plan.program.touches) {  // in the order they were made
+      if (!in.touches.contains(t.id)) continue;
+      const auto found = in.touch_qualification.find(t.id);
+      const std::size_t k = found == in.touch_qualification.end() ? 0 : static_cast<std::size_t>(found->second);
+      if (k >= tip["qualifications"].size()) continue;
+      nlohmann::json& q = tip["qualifications"][k];
+      q["job_touches"] = q["job_touches"].get<int>() + 1;
+      if (q["first_touch"].is_null()) q["first_touch"] = t.id;
+      q["last_touch"] = t.id;
+    }
+  } else if (in.tip.qualification) {
+    tip["qualification"] = {{"time_utc", in.tip.qualification->time_utc},
+                            {"ball_radius_mm", in.tip.qualification->ball_radius_mm},
+                            {"residual_rms_mm", in.tip.qualification->residual_rms_mm}};
+  }
   return {{"cmmd_version", in.version},
           {"config_file", in.config.source.string()},
           {"config_sha256", config_hash},
@@ -38,29 +63,82 @@ nlohmann::json traceability(const JobResultInputs& in) {
           {"driver", in.config.driver},
           {"model", in.request.model},
           {"model_file", in.model.inputs.model_file.string()},
-          {"tip", {{"id", in.tip.id}, {"qualification", qualification}}},
+          {"tip", tip},
           {"seeds", {{"job", in.request.seed}, {"machine", in.config.machine.value("seed", nlohmann::json(nullptr))}}},
           {"started_utc", in.started_utc},
           {"finished_utc", in.finished_utc}};
 }
 
+// Job-wide remarks on the qualifications, for the result's notes.
+std::vector<std::string> qualification_notes(const JobResultInputs& in, double radius_mm) {
+  std::vector<std::string> notes;
+  if (!in.qualifications || in.qualifications->list.size() < 2) return notes;
+  const auto& list = in.qualifications->list;
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "tip %s was qualified %zu times during the job (traceability.tip.qualifications): each touch is "
+                "compensated with the radius qualified for it, moved by (r - %.6f mm) along its approach",
+                in.qualifications->tip.c_str(), list.size(), radius_mm);
+  notes.emplace_back(line);
+  for (std::size_t k = 1; k < list.size(); ++k) {
+    const double moved = (list[k].offset - list[k - 1].offset).norm();
+    const double dr = list[k].ball_radius_mm - list[k - 1].ball_radius_mm;
+    // Two qualifications of one untouched stylus agree to a micrometre or two; more is the stylus moved.
+    if (moved > 0.005 || std::abs(dr) > 0.002) {
+      std::snprintf(line, sizeof line,
+                    "tip %s's qualification %zu differs from the one before by %.4f mm in offset and %.4f mm in "
+                    "radius: if the stylus was knocked in between, the touches before it are off by as much",
+                    in.qualifications->tip.c_str(), k, moved, dr);
+      notes.emplace_back(line);
+    }
+  }
+  return notes;
+}
+
 }  // namespace
 
-std::string write_job_result(JobStore& store, int job_id, const JobResultInputs& in) {
+// A touch made under a qualification of radius r touched where its ball's surface met the part: r
+// ahead of its centre along the contact normal, which for a planned touch is its approach d (a face
+// met square on; an edge's apex on the centre line through the reference point, within δ sideways,
+// so the normal is off d by at most asin(δ/r)). The centre + (r − R)·d then has that same contact
+// point at radius R, to (r − R)(1 − cos θ): 0.02·|r − R| at worst for δ 0.2 mm on a 1 mm ball,
+// nanometres for any requalification of one tip (a larger change holds the job). The ball centre itself is the controller's, made with
+// the offset in force then; nothing more is changed. The first qualification's touches are the
+// plan's own and stay as they are.
+std::map<int, planner::TouchOutcome> touches_at_radius(const std::vector<planner::Touch>& planned,
+                                                       const std::map<int, hal::TouchResult>& touches,
+                                                       const std::map<int, int>& touch_qualification,
+                                                       const JobQualifications* qualifications, double radius_mm) {
+  std::map<int, hal::Vec3> approach;
+  for (const planner::Touch& t : planned) approach[t.id] = t.direction.normalized();
   std::map<int, planner::TouchOutcome> outcomes;
-  for (const auto& [id, r] : in.touches) outcomes[id] = {r.contact, r.centre};
+  for (const auto& [id, r] : touches) {
+    planner::TouchOutcome o{r.contact, r.centre};
+    const auto q = touch_qualification.find(id);
+    if (qualifications && q != touch_qualification.end() && q->second > 0 &&
+        static_cast<std::size_t>(q->second) < qualifications->list.size() && approach.contains(id) && r.contact)
+      o.centre += (qualifications->list[static_cast<std::size_t>(q->second)].ball_radius_mm - radius_mm) * approach[id];
+    outcomes[id] = o;
+  }
+  return outcomes;
+}
+
+std::string write_job_result(JobStore& store, int job_id, const JobResultInputs& in) {
   const double radius = in.machine.tip().ball_radius_mm;
+  const std::map<int, planner::TouchOutcome> outcomes =
+      touches_at_radius(in.plan.program.touches, in.touches, in.touch_qualification, in.qualifications, radius);
   const planner::MeasurementResult result = planner::compensate_plan(
       in.model.features, in.plan, in.T_M_S, outcomes, {radius, in.config.job.trigger_sigma_mm});
 
   nlohmann::json j = planner::to_json(result);
+  for (std::string& note : qualification_notes(in, radius)) j["notes"].push_back(std::move(note));
   j["job"] = job_id;
   j["touches"] = in.touches.size();
   j["machine_time_s"] = in.machine_time_s;
   j["name"] = in.request.name;
   j["registration"] = in.registration.value("registration", nlohmann::json(nullptr));
   j["registration_method"] = in.registration.value("method", "");
-  j["traceability"] = traceability(in);
+  j["traceability"] = traceability(in, radius);
   j["files"] = {{"csv", "result.csv"}, {"holes_csv", "result.holes.csv"}, {"merged_cloud", "merged.ply"},
                 {"plan", "plan.json"}, {"touches", "touches.jsonl"}};
   store.write_file(job_id, "result.csv", planner::to_csv(result));

@@ -4,15 +4,19 @@
 
 #include <map>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_planning.hpp"
+#include "daemon/job_qualifications.hpp"
 #include "daemon/job_store.hpp"
 #include "hal/machine_info.hpp"
 #include "hal/motion.hpp"
+#include "planner/plan_compensation.hpp"
+#include "planner/touch.hpp"
 
 namespace cmm::daemon {
 
@@ -25,14 +29,29 @@ struct JobResultInputs {
   Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
   nlohmann::json registration;  // registration.json as the runner stored it
   std::map<int, hal::TouchResult> touches;  // by plan touch id
+  // The tip qualifications the touches were made under (null: not recorded, a job from before they
+  // were), and which one each touch was made under (by plan touch id; missing: the first).
+  const JobQualifications* qualifications = nullptr;
+  std::map<int, int> touch_qualification;
   hal::TipInfo tip;            // the active tip, with its qualification
   double machine_time_s = 0;   // machine clock from registering to the last touch, this run
   std::string version;         // cmmd's
   std::string started_utc, finished_utc;
 };
 
+// The touch results as compensation takes them, all for the plan's radius R: a touch made under a
+// later qualification (touch_qualification > 0) of radius r is moved by (r − R) along its planned
+// approach, which keeps its contact point (docs/result.md, Traceability). By plan touch id.
+std::map<int, planner::TouchOutcome> touches_at_radius(const std::vector<planner::Touch>& planned,
+                                                       const std::map<int, hal::TouchResult>& touches,
+                                                       const std::map<int, int>& touch_qualification,
+                                                       const JobQualifications* qualifications, double radius_mm);
+
 // Writes the files into the job's folder (each atomically) and returns a one-line summary for the
 // job record's reason ("212 edge points measured, 0 failed; deviation RMS 0.012 mm, max 0.031 mm").
+// Every touch is compensated with the radius of the qualification it was made under
+// (touches_at_radius). result.json is written last, so a job folder with result.json holds the
+// whole result.
 std::string write_job_result(JobStore& store, int job_id, const JobResultInputs& inputs);
 
 }  // namespace cmm::daemon

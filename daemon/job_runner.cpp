@@ -1,6 +1,8 @@
 #include "daemon/job_runner.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <set>
 
@@ -8,6 +10,7 @@
 #include "daemon/job_planning.hpp"
 #include "daemon/job_result.hpp"
 #include "daemon/rpc_error.hpp"
+#include "daemon/storage_error.hpp"
 #include "daemon/touch_journal.hpp"
 #include "daemon/touch_motion.hpp"
 #include "hal/fault.hpp"
@@ -24,7 +27,18 @@ namespace {
 struct Held {
   JobState state;
   std::string reason;
+  std::optional<JobFault> fault = std::nullopt;
 };
+
+// A qualification that moves the radius by more than this is no requalification of the tip the job
+// was planned for (ten times a qualification's repeatability): the plan is made afresh instead.
+constexpr double max_radius_change_mm = 0.01;
+
+const hal::TipInfo* find_tip(const hal::MachineInfo& info, const std::string& id) {
+  for (const hal::TipInfo& tip : info.tips)
+    if (tip.id == id) return &tip;
+  return nullptr;
+}
 
 nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
@@ -97,6 +111,9 @@ JobRunner::Registration JobRunner::measure_plate(double radius_mm) {
   std::vector<planner::Vec3> centres;
   for (std::size_t i = 0; i < touches.size(); ++i) {
     check_control();
+    if (env_.machine.connections() != checked_connections_)
+      throw Held{JobState::paused, "the machine reconnected while the plate was measured (its tip may have changed): "
+                                   "job.resume measures the plate again"};
     sink_.progress({"registering", static_cast<int>(i), static_cast<int>(touches.size()), 0});
     const hal::TouchResult r = touch(touches[i], d.clearance_z, d.probe_speed_mm_s);
     if (!r.contact)
@@ -147,9 +164,9 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
     // touches aside, start the journal and the plan afresh.
     const std::filesystem::path folder = env_.store.folder(id_);
     const std::string stamp = hal::utc_now();
+    if (std::filesystem::exists(folder / "touches.jsonl"))  // throws when it cannot: the old touches must not stay
+      std::filesystem::rename(folder / "touches.jsonl", folder / ("touches.before-" + stamp + ".jsonl"));
     std::error_code ignored;
-    if (std::filesystem::exists(folder / "touches.jsonl"))
-      std::filesystem::rename(folder / "touches.jsonl", folder / ("touches.before-" + stamp + ".jsonl"), ignored);
     std::filesystem::remove(folder / "plan.json", ignored);
     sync_folder(folder);
   }
@@ -197,18 +214,160 @@ void JobRunner::finish_touch_safely(bool clear_of_part) {
   }
 }
 
+// Every touch of plan.json in the journal, with the registration kept: nothing is left to measure.
+bool JobRunner::probing_complete() const {
+  try {
+    const std::optional<std::string> plan = env_.store.read_file(id_, "plan.json");
+    if (!plan || !env_.store.read_file(id_, "registration.json")) return false;
+    std::set<int> made;
+    for (const JournalEntry& e : recover_journal(env_.store.folder(id_) / "touches.jsonl").entries) made.insert(e.touch_id);
+    const nlohmann::json program = nlohmann::json::parse(*plan).at("program");
+    for (const nlohmann::json& t : program)
+      if (!made.contains(t.at("id").get<int>())) return false;
+    return !program.empty();
+  } catch (const std::exception&) {
+    return false;  // whatever is wrong with the files, the ordinary run says so
+  }
+}
+
+// Touches a full disk kept out of the journal, in the order they were made, before anything else
+// of this run; each is reported (job.touch) once it is kept.
+void JobRunner::journal_unjournaled() {
+  if (unjournaled_.empty()) return;
+  const std::filesystem::path file = env_.store.folder(id_) / "touches.jsonl";
+  std::set<int> kept;
+  for (const JournalEntry& e : recover_journal(file).entries) kept.insert(e.touch_id);
+  TouchJournal journal(file);
+  while (!unjournaled_.empty()) {
+    const JournalEntry e = unjournaled_.front();
+    if (!kept.contains(e.touch_id)) {
+      journal.append(e);
+      sink_.touched(e.touch_id, e.result);
+    }
+    unjournaled_.erase(unjournaled_.begin());
+  }
+}
+
+void JobRunner::load_qualifications() {
+  if (qualifications_) return;
+  if (const std::optional<std::string> text = env_.store.read_file(id_, "qualifications.json"))
+    qualifications_ = job_qualifications_from_json(nlohmann::json::parse(*text));
+}
+
+// Before a run's first touch, and again after the driver reconnected: the job's tip as the machine
+// reports it now against the qualification its touches were last made under. Unchanged: on.
+// Changed or vanished (a controller that restarted forgets it): the job takes on a qualification
+// cmmd itself measured since (machine.qualify during the hold), or with `requalify` measures one
+// itself; else it pauses for the operator. `reregister` starts the record afresh, as the journal is.
+// Returns the machine's info as it is afterwards.
+hal::MachineInfo JobRunner::check_qualification(hal::MachineInfo info, bool reregister) {
+  checked_connections_ = env_.machine.connections();
+  const std::filesystem::path folder = env_.store.folder(id_);
+  if (reregister && std::filesystem::exists(folder / "qualifications.json")) {
+    std::filesystem::rename(folder / "qualifications.json", folder / ("qualifications.before-" + hal::utc_now() + ".json"));
+    qualifications_.reset();
+  }
+  if (!reregister) load_qualifications();
+  const std::optional<std::string> kept = reregister ? std::nullopt : env_.store.read_file(id_, "registration.json");
+  const std::string tip_id = qualifications_ ? qualifications_->tip
+                             : kept           ? nlohmann::json::parse(*kept).value("tip", info.active_tip)
+                                              : info.active_tip;
+  const hal::TipInfo* now = find_tip(info, tip_id);
+  if (now == nullptr || tip_id != info.active_tip) return info;  // the tip check before probing holds the job
+  if (!qualifications_) {
+    const char* source = reregister ? "in force when the job was registered again (reregister)"
+                         : kept     ? "in force when cmmd first checked it (the job began before its qualifications "
+                                      "were recorded)"
+                                    : "in force when the job began";
+    JobQualifications first{tip_id, {in_force(*now, source)}};
+    first.list.front().since_utc = hal::utc_now();
+    env_.store.write_file(id_, "qualifications.json", to_json(first).dump(1) + "\n");
+    qualifications_ = std::move(first);
+    return info;
+  }
+  const QualificationInForce& current = qualifications_->list.back();
+  if (same_qualification(current, *now)) return info;
+  if (const std::optional<hal::TipInfo> measured = env_.machine.qualified_by_cmmd(tip_id);
+      measured && now->qualification && same_qualification(in_force(*measured, ""), *now)) {
+    take_on(*now, "machine.qualify while the job was held");
+    return info;
+  }
+  const std::string details = "the job's touches so far were made with " + describe(current) +
+                              "; the machine now reports " + describe(in_force(*now, ""));
+  if (request_.requalify) {
+    spdlog::warn("job {}: tip {}: {}; qualifying it again (requalify)", id_, tip_id, details);
+    requalify(tip_id);
+    info = env_.machine.cmm().info();
+    if (const hal::TipInfo* qualified = find_tip(info, tip_id)) take_on(*qualified, "qualified by the job (requalify)");
+    return info;
+  }
+  const char* what = current.qualification && !now->qualification ? "vanished" : "changed";
+  throw Held{JobState::paused,
+             "tip " + tip_id + "'s qualification " + what + " since the job began: machine.qualify, then job.resume",
+             JobFault{"Qualification", details}};
+}
+
+// The touches from here on are made, and compensated, with the tip as it is now.
+// Before the registration nothing is measured yet, and the new one simply replaces the old.
+void JobRunner::take_on(const hal::TipInfo& tip, const std::string& source) {
+  JobQualifications next = *qualifications_;
+  const QualificationInForce planned = next.list.front();
+  if (!env_.store.read_file(id_, "registration.json")) {
+    next.list.clear();
+  } else if (std::abs(tip.ball_radius_mm - planned.ball_radius_mm) > max_radius_change_mm) {
+    throw Held{JobState::paused,
+               "tip " + tip.id + "'s radius is now " + describe(in_force(tip, "")) + ", the job was planned for " +
+                   describe(planned) + ": not the same tip; job.resume with reregister plans the job afresh",
+               JobFault{"Qualification", "radius changed by more than 0.01 mm"}};
+  }
+  QualificationInForce q = in_force(tip, source);
+  q.since_utc = hal::utc_now();
+  next.list.push_back(std::move(q));
+  env_.store.write_file(id_, "qualifications.json", to_json(next).dump(1) + "\n");
+  qualifications_ = std::move(next);
+  spdlog::info("job {}: tip {} now {} ({}); the touches from here on are made with it", id_, tip.id,
+               describe(qualifications_->list.back()), source);
+}
+
+// hal::qualify as machine.qualify does it, from between two touches: up to the clearance plane (the
+// plan's, which may lie above the machine's) and across it to above the reference sphere first; the
+// qualification's own moves start from there.
+void JobRunner::requalify(const std::string& tip_id) {
+  hal::Cmm& cmm = env_.machine.cmm();
+  const planner::MachineDescription& d = env_.config.description;
+  double clearance_z = d.clearance_z;
+  if (const std::optional<std::string> plan = env_.store.read_file(id_, "plan.json"))
+    clearance_z = std::max(clearance_z, nlohmann::json::parse(*plan).value("clearance_z", clearance_z));
+  check_stop();
+  rise_to_clearance(cmm, clearance_z, {0, d.probe_speed_mm_s});
+  check_stop();
+  const hal::Vec3 at = cmm.status().position, sphere = cmm.info().reference_sphere.centre;
+  cmm.move({hal::Vec3(sphere.x(), sphere.y(), at.z()), 0});
+  hal::QualificationOptions options;
+  options.before_motion = [this] { check_stop(); };
+  const hal::TipQualification q = env_.machine.qualify(tip_id, options);
+  spdlog::info("job {}: tip {} qualified: r {:.5f} mm, rms {:.5f} mm", id_, tip_id, q.ball_radius_mm, q.residual_rms_mm);
+}
+
 void JobRunner::run(bool rehome, bool reregister) {
   const std::string started = hal::utc_now();
   try {
     sink_.state(JobState::planning, "", std::nullopt);
+    journal_unjournaled();
     // Planning a large model takes a while: a cancel or a shutdown ends it at its next step.
     const geometry::CancelCheck planning_cancel{[this] { return control_.cancel || control_.shutdown; }};
     const ReferenceModel model = load_reference_model(env_.models.resolve(request_.model), request_,
                                                       env_.config.description.travel_box, planning_cancel);
     check_control();
-    prepare_machine(rehome);
+    // Every planned touch made (the result could not be written): the result is made again from the
+    // journal, with no motion at all, so the machine is only asked for its description.
+    const bool probed = !reregister && probing_complete();
+    if (probed) env_.machine.bring_up();
+    else prepare_machine(rehome);
     const double clock0_s = env_.machine.cmm().status().t_s;
-    const hal::MachineInfo info = env_.machine.cmm().info();
+    hal::MachineInfo info = env_.machine.cmm().info();
+    if (probed) load_qualifications();
+    else info = check_qualification(std::move(info), reregister);
     const hal::TipInfo tip = active_tip(info);
     const Registration reg = registration(reregister, tip.ball_radius_mm, tip.id);
     planner::MachineDescription machine = machine_for_job(env_.config.description, info);
@@ -217,7 +376,7 @@ void JobRunner::run(bool rehome, bool reregister) {
         t.ball_radius_mm = reg.file.value("radius_mm", t.ball_radius_mm);
         machine.active_tip = t.id;
       }
-    if (machine.active_tip != info.active_tip)
+    if (!probed && machine.active_tip != info.active_tip)
       throw Held{JobState::paused, "job " + std::to_string(id_) + " was registered with tip " + machine.active_tip +
                                        " but the machine's active tip is " + info.active_tip +
                                        ": select it again, or resume with reregister"};
@@ -232,7 +391,11 @@ void JobRunner::run(bool rehome, bool reregister) {
     sink_.state(JobState::probing, "", std::nullopt);
     const std::filesystem::path journal_file = env_.store.folder(id_) / "touches.jsonl";
     std::map<int, hal::TouchResult> results;
-    for (const JournalEntry& e : recover_journal(journal_file).entries) results[e.touch_id] = e.result;
+    std::map<int, int> qualification_of;  // touch id → index into qualifications_
+    for (const JournalEntry& e : recover_journal(journal_file).entries) {
+      results[e.touch_id] = e.result;
+      qualification_of[e.touch_id] = e.qualification;
+    }
     TouchJournal journal(journal_file);
     std::map<int, double> planned_s;
     for (const planner::Motion& m : plan.program.motions) planned_s[m.touch] += m.time_s;
@@ -253,15 +416,21 @@ void JobRunner::run(bool rehome, bool reregister) {
     for (const planner::Touch& t : plan.program.touches) {
       if (results.contains(t.id)) continue;
       check_control();
+      if (env_.machine.connections() != checked_connections_)  // the driver reconnected: the tip may have changed
+        info = check_qualification(env_.machine.cmm().info(), false);
+      const int q = static_cast<int>(qualifications_ ? qualifications_->list.size() - 1 : 0);
       const hal::TouchResult r = touch(t, clearance, machine.probe_speed_mm_s);
       try {
-        journal.append({t.id, r});
-      } catch (const std::exception& e) {
-        // The touch is made but not kept: hold the job (a full disk is the operator's to clear);
-        // the resume makes this touch again, so the result still holds it exactly once.
-        throw Held{JobState::paused, std::string("the touch journal could not be written: ") + e.what()};
+        journal.append({t.id, r, q});
+      } catch (const std::exception&) {
+        // The touch is made but not kept (a full disk): it waits here and is journalled first when
+        // the job goes on, so it is neither lost nor made twice (unless cmmd stops meanwhile: then
+        // the resume makes it again). The job holds, storage full (below).
+        unjournaled_.push_back({t.id, r, q});
+        throw;
       }
       results[t.id] = r;
+      qualification_of[t.id] = q;
       remaining_s -= planned_s[t.id];
       planned_done_s += planned_s[t.id];
       sink_.touched(t.id, r);
@@ -269,7 +438,7 @@ void JobRunner::run(bool rehome, bool reregister) {
     }
     // Back up to the travel plane: a finished job leaves the probe clear of the part.
     const hal::Vec3 at = env_.machine.cmm().status().position;
-    if (at.z() < clearance) env_.machine.cmm().move({hal::Vec3(at.x(), at.y(), clearance), 0});
+    if (!probed && at.z() < clearance) env_.machine.cmm().move({hal::Vec3(at.x(), at.y(), clearance), 0});
 
     const JobResultInputs inputs{.model = model,
                                  .plan = plan,
@@ -279,6 +448,8 @@ void JobRunner::run(bool rehome, bool reregister) {
                                  .T_M_S = reg.T_M_S,
                                  .registration = reg.file,
                                  .touches = results,
+                                 .qualifications = qualifications_ ? &*qualifications_ : nullptr,
+                                 .touch_qualification = qualification_of,
                                  .tip = tip,
                                  .machine_time_s = env_.machine.cmm().status().t_s - clock0_s,
                                  .version = env_.version,
@@ -298,7 +469,7 @@ void JobRunner::run(bool rehome, bool reregister) {
     // A cancel ends the job, so its touch is left now; a stop or a shutdown means no more motion:
     // the recorded search line waits for the next mover.
     if (held.state == JobState::cancelled) finish_touch_safely(true);
-    sink_.state(held.state, held.reason, std::nullopt);
+    sink_.state(held.state, held.reason, held.fault);
   } catch (const hal::Fault& fault) {
     // A stop the operator or cmmd asked for surfaces as the driver's Aborted; say why it came.
     if (control_.cancel) {
@@ -315,7 +486,12 @@ void JobRunner::run(bool rehome, bool reregister) {
   } catch (const hal::StateError& e) {
     sink_.state(JobState::paused, std::string("machine not ready: ") + e.what(), JobFault{"State", e.what()});
   } catch (const std::exception& e) {
-    sink_.state(JobState::failed, e.what(), JobFault{"Internal", e.what()});
+    // A file of the job that cannot be written (a full disk) holds the job: what it measured is
+    // kept, and job.resume goes on once the operator has made room.
+    if (const auto failure = storage_failure(e))
+      sink_.state(JobState::paused, failure->hold_reason(), JobFault{failure->fault_kind(), e.what()});
+    else
+      sink_.state(JobState::failed, e.what(), JobFault{"Internal", e.what()});
   }
 }
 

@@ -3,16 +3,20 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_record.hpp"
 #include "daemon/job_request.hpp"
+#include "daemon/job_qualifications.hpp"
 #include "daemon/job_store.hpp"
 #include "daemon/machine_link.hpp"
 #include "daemon/model_store.hpp"
+#include "daemon/touch_journal.hpp"
 #include "hal/motion.hpp"
 #include "planner/touch.hpp"
 
@@ -55,6 +59,12 @@ class JobRunner {
  private:
   struct Registration;
   void prepare_machine(bool rehome);
+  bool probing_complete() const;
+  void journal_unjournaled();
+  void load_qualifications();
+  hal::MachineInfo check_qualification(hal::MachineInfo info, bool reregister);
+  void take_on(const hal::TipInfo& tip, const std::string& source);
+  void requalify(const std::string& tip_id);
   Registration registration(bool reregister, double radius_mm, const std::string& tip);
   Registration measure_plate(double radius_mm);
   void check_control() const;
@@ -69,6 +79,11 @@ class JobRunner {
   JobRequest request_;
   JobControl& control_;
   JobSink sink_;
+  // Touches made but not journalled (the journal could not be written): journalled first when the
+  // job goes on, so a full disk loses no touch and makes none twice.
+  std::vector<JournalEntry> unjournaled_;
+  std::optional<JobQualifications> qualifications_;  // qualifications.json, once read or made
+  std::uint64_t checked_connections_ = 0;            // MachineLink::connections() at the last check
 };
 
 }  // namespace cmm::daemon

@@ -2,7 +2,11 @@
 // turns the jobs a restart cut short into interrupted ones.
 #include "daemon/job_store.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -21,6 +25,49 @@ namespace fs = std::filesystem;
 namespace {
 constexpr const char* record_file = "job.json";
 constexpr const char* request_file = "request.json";
+// Space kept aside in each job folder for job.json: a job's state can still be saved on a full disk,
+// so that job.json says what cmmd says (paused, storage full) rather than what it said before.
+constexpr const char* spare_file = ".job.json.spare";
+constexpr std::size_t spare_bytes = 16 * 1024;
+
+// Allocates the spare if it is missing; false when there is no room for it (then job.json is
+// written the ordinary way until there is).
+bool keep_spare(const fs::path& dir) {
+  const fs::path spare = dir / spare_file;
+  const int fd = ::open(spare.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) return false;
+  const int rc = ::posix_fallocate(fd, 0, static_cast<off_t>(spare_bytes));
+  ::close(fd);
+  if (rc != 0) ::unlink(spare.c_str());  // half a spare is no reserve: give its space back
+  return rc == 0;
+}
+
+// job.json replaced atomically. With a spare at hand the new record is written into the spare's
+// blocks (no new space needed), which is then renamed over job.json; the old job.json's blocks are
+// what the next spare takes. Without one, write_atomically. Throws geometry::FileError.
+void write_record(const fs::path& dir, const std::string& content) {
+  const fs::path spare = dir / spare_file, file = dir / record_file;
+  if (content.size() <= spare_bytes && fs::exists(spare)) {
+    const int fd = ::open(spare.c_str(), O_WRONLY | O_CLOEXEC);
+    bool written = fd >= 0;
+    for (std::size_t done = 0; written && done < content.size();) {
+      const ssize_t n = ::pwrite(fd, content.data() + done, content.size() - done, static_cast<off_t>(done));
+      if (n < 0 && errno == EINTR) continue;
+      written = n > 0;
+      if (written) done += static_cast<std::size_t>(n);
+    }
+    written = written && ::ftruncate(fd, static_cast<off_t>(content.size())) == 0 && ::fsync(fd) == 0;
+    if (fd >= 0) written = ::close(fd) == 0 && written;
+    if (written && ::rename(spare.c_str(), file.c_str()) == 0) {
+      sync_folder(dir);
+      keep_spare(dir);
+      return;
+    }
+    ::unlink(spare.c_str());  // whatever it holds now is no record: the ordinary way below
+  }
+  write_atomically(file, content);
+  keep_spare(dir);
+}
 
 // The id a job folder's name spells ("000042" → 42), or nullopt for anything else in jobs_dir.
 std::optional<int> folder_id(const fs::directory_entry& entry) {
@@ -103,6 +150,16 @@ JobRecord rebuild_record(const fs::path& folder, int id, const std::string& why)
   return record;
 }
 
+// A restart must not stop at a job it cannot save (a full disk): the record comes back as read and
+// rewritten in memory; job.json keeps what it said, which the next start reads the same way.
+void save_recovered(const fs::path& dir, const JobRecord& record) {
+  try {
+    write_record(dir, nlohmann::json(record).dump(2));
+  } catch (const std::exception& e) {
+    spdlog::error("job store: job {} is {} but cannot be saved so: {}", record.id, to_string(record.state), e.what());
+  }
+}
+
 // A file directly in the job folder; the store's own two files are written by the store only.
 void check_file_name(const std::string& name, bool writing) {
   const bool reserved = writing && (name == record_file || name == request_file);
@@ -141,13 +198,13 @@ std::vector<JobRecord> JobStore::recover() {
     } catch (const std::exception& e) {
       spdlog::error("job store: {}", e.what());
       record = rebuild_record(dir, id, e.what());
-      write_atomically(dir / record_file, nlohmann::json(record).dump(2));
+      save_recovered(dir, record);
     }
     if (is_running(record.state)) {
       record.reason = std::string("cmmd restarted during ") + to_string(record.state);
       record.state = JobState::interrupted;
       record.updated = hal::utc_now();
-      write_atomically(dir / record_file, nlohmann::json(record).dump(2));
+      save_recovered(dir, record);
       spdlog::info("job store: job {} interrupted ({})", id, record.reason);
     }
     jobs.push_back(std::move(record));
@@ -162,14 +219,22 @@ JobRecord JobStore::create(const nlohmann::json& request, std::string name, std:
   while (!fs::create_directory(folder(next_id_))) ++next_id_;
   record.id = next_id_++;
   const fs::path dir = folder(record.id);
-  sync_folder(jobs_dir_);
   record.name = std::move(name);
   record.model = std::move(model);
   record.created = record.updated = hal::utc_now();
   record.progress.phase = to_string(JobState::queued);
   record.request = request;
-  write_atomically(dir / request_file, request.dump(2));
-  write_atomically(dir / record_file, nlohmann::json(record).dump(2));
+  try {
+    sync_folder(jobs_dir_);
+    write_atomically(dir / request_file, request.dump(2));
+    write_record(dir, nlohmann::json(record).dump(2));
+  } catch (...) {
+    // No job half made (a full disk): the folder goes, and its id with it is free again.
+    std::error_code ignored;
+    fs::remove_all(dir, ignored);
+    next_id_ = record.id;
+    throw;
+  }
   return record;
 }
 
@@ -177,7 +242,7 @@ void JobStore::save(const JobRecord& record) {
   std::lock_guard lock(mutex_);
   const fs::path dir = folder(record.id);
   if (!fs::is_directory(dir)) throw geometry::FileError::whole(dir, "no such job folder (job " + std::to_string(record.id) + ")");
-  write_atomically(dir / record_file, nlohmann::json(record).dump(2));
+  write_record(dir, nlohmann::json(record).dump(2));
 }
 
 void JobStore::write_file(int id, const std::string& name, std::string_view content) {

@@ -27,10 +27,13 @@ class JobStore {
   std::vector<JobRecord> recover();
 
   // A new queued job with the next id: its folder, request.json, then job.json, each durable
-  // before this returns.
+  // before this returns. When a write fails (a full disk: geometry::FileError with its errno) the
+  // folder is removed again and the id stays free.
   JobRecord create(const nlohmann::json& request, std::string name, std::string model);
 
-  // Replaces the job's job.json (the caller sets `updated`); geometry::FileError on failure.
+  // Replaces the job's job.json (the caller sets `updated`); geometry::FileError on failure. Each
+  // job folder keeps a small allocated spare (.job.json.spare) that the next save writes into, so a
+  // record still saves on a full disk; the spare is taken again from the old record's space.
   void save(const JobRecord& record);
 
   std::filesystem::path folder(int id) const;

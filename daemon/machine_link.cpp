@@ -36,9 +36,9 @@ MachineLink::MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, st
 
 void MachineLink::enter_touch(const SearchLine& line) {
   const std::lock_guard lock(touch_mutex_);
-  touch_ = line;
   if (!touch_file_.empty())
     write_atomically(touch_file_, nlohmann::json{{"start", vec(line.start)}, {"direction", vec(line.direction)}}.dump());
+  touch_ = line;
 }
 
 void MachineLink::left_touch() {
@@ -68,9 +68,33 @@ void MachineLink::bring_up() {
     cmm_->configure(block_);
     configured_ = true;
   }
+  bool was_up = true;
+  try {
+    (void)cmm_->status();
+  } catch (const std::exception&) {
+    was_up = false;  // not connected (StateError), or the link just broke (CommLost)
+  }
   // Both are no-ops for a driver already that far (and status() cannot be asked before connect).
   cmm_->connect();
+  if (!was_up) ++connections_;
   cmm_->enable();
+}
+
+hal::TipQualification MachineLink::qualify(const std::string& tip_id, const hal::QualificationOptions& options) {
+  const hal::TipQualification q = hal::qualify(*cmm_, tip_id, options);
+  for (const hal::TipInfo& tip : cmm_->info().tips)
+    if (tip.id == tip_id) {
+      const std::lock_guard lock(qualified_mutex_);
+      qualified_[tip_id] = tip;
+    }
+  return q;
+}
+
+std::optional<hal::TipInfo> MachineLink::qualified_by_cmmd(const std::string& tip_id) const {
+  const std::lock_guard lock(qualified_mutex_);
+  const auto it = qualified_.find(tip_id);
+  if (it == qualified_.end()) return std::nullopt;
+  return it->second;
 }
 
 nlohmann::json MachineLink::status_json() {

@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hal/cmm.hpp"
+#include "hal/qualification.hpp"
 
 namespace cmm::daemon {
 
@@ -35,6 +37,16 @@ class MachineLink {
   // Configures once, then connects and enables as far as needed. Throws hal::Fault (CommLost when
   // the machine cannot be reached) or hal::ConfigError for a bad driver block.
   void bring_up();
+  // How many times bring_up() found the link down and brought it up: a job compares it to see that
+  // the driver reconnected (a controller that restarted may have lost its tip qualifications).
+  std::uint64_t connections() const { return connections_.load(); }
+
+  // hal::qualify on the machine (the lease holder's motion), and the result remembered as the
+  // machine then reports it: a job held because its tip's qualification changed takes on exactly a
+  // qualification cmmd itself measured (machine.qualify, or the job's own requalification).
+  hal::TipQualification qualify(const std::string& tip_id, const hal::QualificationOptions& options);
+  // The tip as the machine reported it right after cmmd last qualified it (since cmmd started).
+  std::optional<hal::TipInfo> qualified_by_cmmd(const std::string& tip_id) const;
   // status() that never throws: a link that is down reads as {"link": "down", "fault": …}.
   nlohmann::json status_json();
   hal::Cmm& cmm() { return *cmm_; }  // motion for the lease holder; status, stop, abort for anyone
@@ -62,7 +74,8 @@ class MachineLink {
   std::optional<std::string> holder() const;
 
   // Recorded (durably, with a touch file) before a touch's first motion, cleared once the ball is
-  // back at its start.
+  // back at its start. When the touch file cannot be written (a full disk: geometry::FileError),
+  // nothing is recorded and the touch must not begin.
   void enter_touch(const SearchLine& line);
   void left_touch();
   std::optional<SearchLine> touch_in_progress() const;
@@ -87,6 +100,9 @@ class MachineLink {
   mutable std::mutex touch_mutex_;
   std::optional<SearchLine> touch_;
   std::atomic<std::uint64_t> stops_{0};
+  std::atomic<std::uint64_t> connections_{0};
+  mutable std::mutex qualified_mutex_;
+  std::map<std::string, hal::TipInfo> qualified_;
 };
 
 nlohmann::json fault_json(const std::exception& e);  // {"kind", "message"}; kind "Internal" for a non-fault

@@ -9,13 +9,13 @@
 #include <array>
 #include <cctype>
 #include <cerrno>
-#include <cstring>
 #include <vector>
 
 #include "daemon/atomic_file.hpp"
 #include "daemon/base64.hpp"
 #include "daemon/rpc_error.hpp"
 #include "daemon/sha256.hpp"
+#include "daemon/storage_error.hpp"
 #include "geometry/file_error.hpp"
 
 namespace cmm::daemon {
@@ -51,28 +51,29 @@ std::uint64_t size_or_zero(const fs::path& file) {
   return error ? 0 : size;
 }
 
-[[noreturn]] void fail(const fs::path& file, const std::string& step) {
-  throw geometry::FileError::whole(file, step + ": " + std::strerror(errno));
+[[noreturn]] void fail(const fs::path& file, const std::string& step, int error) {
+  throw geometry::FileError::system(file, step, error);
 }
 
-// Writes `bytes` at `offset` (cutting whatever lay beyond it) and makes it durable.
+// Writes `bytes` at `offset` (cutting whatever lay beyond it) and makes it durable. When that fails
+// (a full disk) the file is cut back to `offset`: it holds exactly the chunks before this one, so
+// the upload goes on from there once there is room, and no half chunk is ever counted as received.
 void write_part(const fs::path& file, std::uint64_t offset, std::string_view bytes) {
   const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) fail(file, "cannot open the partial upload");
-  auto abandon = [&](const std::string& step) {
-    const int error = errno;
+  if (fd < 0) fail(file, "cannot open the partial upload", errno);
+  auto abandon = [&](const std::string& step, int error) {
+    if (::ftruncate(fd, static_cast<off_t>(offset)) == 0) (void)::fsync(fd);
     ::close(fd);
-    errno = error;
-    fail(file, step);
+    fail(file, step, error);
   };
-  if (::ftruncate(fd, static_cast<off_t>(offset)) != 0) abandon("truncate");
+  if (::ftruncate(fd, static_cast<off_t>(offset)) != 0) abandon("truncate", errno);
   for (std::size_t done = 0; done < bytes.size();) {
     const ssize_t n = ::pwrite(fd, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) abandon("write");
+    if (n <= 0) abandon("write", n < 0 ? errno : EIO);
     done += static_cast<std::size_t>(n);
   }
-  if (::fsync(fd) != 0) abandon("fsync");
+  if (::fsync(fd) != 0) abandon("fsync", errno);
   ::close(fd);
 }
 }  // namespace
@@ -135,11 +136,20 @@ UploadStatus ModelStore::upload(const UploadChunk& chunk) {
                             std::to_string(chunk.size) + "; upload dropped",
                         0);
   }
-  if (chunk.offset == 0 || !bytes.empty()) write_part(part, chunk.offset, bytes);
-  if (chunk.offset == 0) sync_folder(partial_dir_);  // the part file itself survives a power cut
-  const std::uint64_t now_received = chunk.offset + bytes.size();
-  if (now_received < chunk.size) return {model, now_received, false};
-  return finish(sha, ext, chunk.size);
+  try {
+    if (chunk.offset == 0 || !bytes.empty()) write_part(part, chunk.offset, bytes);
+    if (chunk.offset == 0) sync_folder(partial_dir_);  // the part file itself survives a power cut
+    const std::uint64_t now_received = chunk.offset + bytes.size();
+    if (now_received < chunk.size) return {model, now_received, false};
+    return finish(sha, ext, chunk.size);
+  } catch (const RpcError&) {
+    throw;
+  } catch (const std::exception& e) {
+    // A full disk: −32021 with the file, and where to go on from once there is room.
+    if (const auto failure = storage_failure(e); failure && failure->full())
+      throw storage_full_error(*failure, {{"expected_offset", size_or_zero(part)}});
+    throw;
+  }
 }
 
 UploadStatus ModelStore::finish(const std::string& sha, const std::string& ext, std::uint64_t size) {

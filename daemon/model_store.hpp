@@ -40,7 +40,9 @@ class ModelStore {
   // on after a restart. The last chunk checks the sha256 and moves the file in place. Throws
   // RpcError: upload_error (data.expected_offset) for an out-of-order chunk, a size over the limit,
   // more bytes than `size` or a sha256 mismatch (the partial data is then dropped); invalid_params
-  // (data.path) for a bad name, digest or base64.
+  // (data.path) for a bad name, digest or base64; storage_full (data.file, data.expected_offset)
+  // when the disk is full: the chunk is not kept (the partial file is cut back to the chunks before
+  // it) and the same chunk may be sent again once there is room.
   UploadStatus upload(const UploadChunk& chunk);
 
   // The file a job's "model" names: "sha256:<hex><ext>" → the upload in that format, "sha256:<hex>"

@@ -31,6 +31,7 @@ inline constexpr int upload_error = -32015;
 inline constexpr int planning_error = -32016;
 inline constexpr int registration_error = -32017;
 inline constexpr int shutting_down = -32020;
+inline constexpr int storage_full = -32021;
 }  // namespace rpc_code
 
 // Thrown by a method handler (or the transport) and sent as the response's "error" member.

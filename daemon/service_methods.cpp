@@ -130,7 +130,7 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
             }
             hal::QualificationOptions options;
             options.before_motion = check_stop;
-            const hal::TipQualification q = hal::qualify(cmm, id, options);
+            const hal::TipQualification q = s.machine.qualify(id, options);
             spdlog::info("tip {} qualified: r {:.5f} mm, rms {:.5f} mm", id, q.ball_radius_mm, q.residual_rms_mm);
             return nlohmann::json{{"tip", id},
                                   {"ball_radius_mm", q.ball_radius_mm},

@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -28,11 +27,12 @@ JournalEntry from_json(const nlohmann::json& j) {
   e.result.travel_mm = j.at("travel_mm").get<double>();
   e.result.t_s = j.at("t_s").get<double>();
   e.result.tip_id = j.at("tip").get<std::string>();
+  e.qualification = j.value("q", 0);
   return e;
 }
 
-[[noreturn]] void fail(const std::filesystem::path& file, const std::string& step) {
-  throw geometry::FileError::whole(file, step + ": " + std::strerror(errno));
+[[noreturn]] void fail(const std::filesystem::path& file, const std::string& step, int error = errno) {
+  throw geometry::FileError::system(file, step, error);
 }
 }  // namespace
 
@@ -40,7 +40,8 @@ std::string to_json_line(const JournalEntry& e) {
   // nlohmann prints the shortest text that reads back as the same double: a touch read back is the
   // very number that was measured.
   nlohmann::json j = {{"touch", e.touch_id},        {"contact", e.result.contact}, {"centre", vec(e.result.centre)},
-                      {"travel_mm", e.result.travel_mm}, {"t_s", e.result.t_s},     {"tip", e.result.tip_id}};
+                      {"travel_mm", e.result.travel_mm}, {"t_s", e.result.t_s},     {"tip", e.result.tip_id},
+                      {"q", e.qualification}};
   return j.dump();
 }
 
@@ -61,6 +62,7 @@ Recovery recover_journal(const std::filesystem::path& file) {
     try {
       if (!complete) throw std::runtime_error("no newline");
       out.entries.push_back(from_json(nlohmann::json::parse(line)));
+      out.kept_bytes = end + 1;
     } catch (const std::exception& e) {
       if (!last) throw geometry::FileError::at_line(file, line_number, std::string("not a journal line: ") + e.what());
       out.torn_tail = true;  // a crash mid-append: the touch it held was never reported as made
@@ -72,15 +74,17 @@ Recovery recover_journal(const std::filesystem::path& file) {
 }
 
 TouchJournal::TouchJournal(const std::filesystem::path& file) : file_(file) {
-  // Cut a torn tail so the next line starts on a line of its own.
   const Recovery recovered = recover_journal(file);
-  if (recovered.torn_tail) {
-    std::string kept;
-    for (const auto& e : recovered.entries) kept += to_json_line(e) + "\n";
-    write_atomically(file, kept);
-  }
   fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (fd_ < 0) fail(file, "cannot open the touch journal");
+  // Cut a torn tail so the next line starts on a line of its own. Only the tail may be torn (a bad
+  // line before it is an error above), so the complete lines end where the tail begins.
+  if (recovered.torn_tail && (::ftruncate(fd_, static_cast<off_t>(recovered.kept_bytes)) != 0 || ::fdatasync(fd_) != 0)) {
+    const int error = errno;
+    ::close(fd_);
+    fd_ = -1;
+    fail(file, "cutting the torn last line", error);
+  }
   sync_folder(file.has_parent_path() ? file.parent_path() : ".");
 }
 
@@ -90,13 +94,20 @@ TouchJournal::~TouchJournal() {
 
 void TouchJournal::append(const JournalEntry& entry) {
   const std::string line = to_json_line(entry) + "\n";
+  const off_t end = ::lseek(fd_, 0, SEEK_END);
+  if (end < 0) fail(file_, "append");
+  // A line half written (the disk filled up under it) or not known to be on disk is taken back.
+  const auto take_back = [&](const std::string& step, int error) {
+    if (::ftruncate(fd_, end) == 0) (void)::fdatasync(fd_);
+    fail(file_, step, error);
+  };
   for (std::size_t done = 0; done < line.size();) {
     const ssize_t n = ::write(fd_, line.data() + done, line.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) fail(file_, "append");
+    if (n <= 0) take_back("append", n < 0 ? errno : EIO);
     done += static_cast<std::size_t>(n);
   }
-  if (::fdatasync(fd_) != 0) fail(file_, "fdatasync");
+  if (::fdatasync(fd_) != 0) take_back("fdatasync", errno);
 }
 
 }  // namespace cmm::daemon

@@ -2,6 +2,7 @@
 // job goes on, so a daemon killed at any moment keeps every touch it reported (DESIGN.md, Files).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -10,10 +11,13 @@
 
 namespace cmm::daemon {
 
-// One journal line: which planned touch it was and what the machine reported.
+// One journal line: which planned touch it was, what the machine reported, and under which of the
+// job's tip qualifications it was made (an index into qualifications.json; lines written before
+// there was one read as 0).
 struct JournalEntry {
   int touch_id = -1;       // the plan's touch id
   hal::TouchResult result;
+  int qualification = 0;
 };
 
 std::string to_json_line(const JournalEntry& entry);  // one line, no newline
@@ -21,6 +25,7 @@ std::string to_json_line(const JournalEntry& entry);  // one line, no newline
 struct Recovery {
   std::vector<JournalEntry> entries;  // every complete line, in order
   bool torn_tail = false;             // the last line was cut short by a crash, and was dropped
+  std::uintmax_t kept_bytes = 0;      // the length of the complete lines: where a torn tail begins
 };
 
 // Reads a journal back. A missing file is an empty journal. A torn last line (no newline, or not
@@ -31,13 +36,15 @@ Recovery recover_journal(const std::filesystem::path& file);
 class TouchJournal {
  public:
   // Opens `file` for appending (creating it and syncing its folder). A torn tail left by a crash is
-  // cut off first, so new lines never follow half a line.
+  // cut off first (truncated, which needs no free space), so new lines never follow half a line.
   explicit TouchJournal(const std::filesystem::path& file);
   ~TouchJournal();
   TouchJournal(const TouchJournal&) = delete;
   TouchJournal& operator=(const TouchJournal&) = delete;
 
-  // Appends one line and fsyncs it; when this returns, the touch survives a crash.
+  // Appends one line and fsyncs it; when this returns, the touch survives a crash. When the write
+  // or the sync fails (a full disk: geometry::FileError with its errno) the file is cut back to
+  // where it ended before, so it holds no half line and the touch is not in it.
   void append(const JournalEntry& entry);
   const std::filesystem::path& file() const { return file_; }
 

@@ -1,6 +1,8 @@
 // Formats FileError messages as "file: where: what".
 #include "geometry/file_error.hpp"
 
+#include <cstring>
+
 namespace cmm::geometry {
 
 FileError FileError::at_line(const std::filesystem::path& file, std::size_t line, const std::string& message) {
@@ -21,7 +23,12 @@ FileError FileError::at_field(const std::filesystem::path& file, const std::stri
 }
 
 FileError FileError::nested(const FileError& inner, const std::string& prefix) {
-  return FileError(inner.file_, inner.what(), inner.pointer_.empty() ? std::string() : prefix + inner.pointer_);
+  return FileError(inner.file_, inner.what(), inner.pointer_.empty() ? std::string() : prefix + inner.pointer_,
+                   inner.error_number_);
+}
+
+FileError FileError::system(const std::filesystem::path& file, const std::string& step, int error_number) {
+  return FileError(file, file.string() + ": " + step + ": " + std::strerror(error_number), {}, error_number);
 }
 
 }  // namespace cmm::geometry

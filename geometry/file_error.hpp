@@ -19,18 +19,22 @@ class FileError : public std::runtime_error {
   // `pointer` is its JSON Pointer ("/fiducial/corner"), for a client to point at.
   static FileError at_field(const std::filesystem::path& file, const std::string& field, std::string pointer,
                             const std::string& message);
-
   // The same error for a field of an object nested at `prefix` ("/plate") in another input.
   static FileError nested(const FileError& inner, const std::string& prefix);
+  // A system call on the file failed: "touches.jsonl: append: No space left on device", and the
+  // errno kept, so a caller can tell a full disk (ENOSPC, EDQUOT) from a broken one.
+  static FileError system(const std::filesystem::path& file, const std::string& step, int error_number);
 
   const std::filesystem::path& file() const { return file_; }
   const std::string& json_pointer() const { return pointer_; }  // empty unless at_field
+  int error_number() const { return error_number_; }            // errno of the failed call; 0 when none
 
  private:
-  FileError(std::filesystem::path file, const std::string& full_message, std::string pointer = {})
-      : std::runtime_error(full_message), file_(std::move(file)), pointer_(std::move(pointer)) {}
+  FileError(std::filesystem::path file, const std::string& full_message, std::string pointer = {}, int error_number = 0)
+      : std::runtime_error(full_message), file_(std::move(file)), pointer_(std::move(pointer)), error_number_(error_number) {}
   std::filesystem::path file_;
   std::string pointer_;
+  int error_number_ = 0;
 };
 
 }  // namespace cmm::geometry

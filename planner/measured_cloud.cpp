@@ -54,7 +54,7 @@ class FileDescriptor {
 };
 
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw geometry::FileError::whole(path, what + ": " + std::strerror(errno));
+  throw geometry::FileError::system(path, what, errno);
 }
 
 void write_all(int fd, const std::string& bytes, const std::filesystem::path& path) {

@@ -9,6 +9,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "daemon/atomic_file.hpp"
 #include "fresh_folder.hpp"
 #include "geometry/file_error.hpp"
 #include "killed_writer.hpp"
@@ -178,7 +179,8 @@ TEST(JobStore, AProcessKilledWhileCreatingAndSavingLeavesARecoverableStore) {
           for (int done = 1; done <= 3; ++done) {
             r.progress = {"probing", done, 3, 0};
             store.save(r);
-            std::ofstream(reported, std::ios::trunc) << r.id << " " << done;
+            // Replaced whole: a kill between truncating and writing it would read as nothing reported.
+            write_atomically(reported, std::to_string(r.id) + " " + std::to_string(done));
           }
         }
       },

@@ -1,0 +1,90 @@
+// qualifications.json: reading, writing and comparing the qualifications a job's touches rest on.
+#include "daemon/job_qualifications.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace cmm::daemon {
+
+namespace {
+
+constexpr double same_mm = 1e-7;
+
+nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+hal::Vec3 vec_from(const nlohmann::json& j) {
+  return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()};
+}
+
+}  // namespace
+
+QualificationInForce in_force(const hal::TipInfo& tip, std::string source) {
+  QualificationInForce q;
+  q.ball_radius_mm = tip.ball_radius_mm;
+  q.offset = tip.offset;
+  q.qualification = tip.qualification;
+  q.source = std::move(source);
+  return q;
+}
+
+bool same_qualification(const QualificationInForce& a, const hal::TipInfo& now) {
+  if (std::abs(a.ball_radius_mm - now.ball_radius_mm) > same_mm) return false;
+  if (((a.offset - now.offset).array().abs() > same_mm).any()) return false;
+  if (a.qualification.has_value() != now.qualification.has_value()) return false;
+  return !a.qualification || a.qualification->time_utc == now.qualification->time_utc;
+}
+
+std::string describe(const QualificationInForce& q) {
+  char radius[64];
+  std::snprintf(radius, sizeof radius, "r %.6f mm", q.ball_radius_mm);
+  if (!q.qualification) return std::string(radius) + " nominal (never qualified)";
+  return std::string(radius) + ", qualified " + q.qualification->time_utc;
+}
+
+nlohmann::json to_json(const JobQualifications& q) {
+  nlohmann::json list = nlohmann::json::array();
+  for (std::size_t i = 0; i < q.list.size(); ++i) {
+    const QualificationInForce& e = q.list[i];
+    nlohmann::json qualification = nullptr;
+    if (e.qualification)
+      qualification = {{"time_utc", e.qualification->time_utc},
+                       {"ball_radius_mm", e.qualification->ball_radius_mm},
+                       {"offset", vec(e.qualification->offset)},
+                       {"residual_rms_mm", e.qualification->residual_rms_mm},
+                       {"touches", e.qualification->touches}};
+    list.push_back({{"index", i},
+                    {"ball_radius_mm", e.ball_radius_mm},
+                    {"offset", vec(e.offset)},
+                    {"qualification", qualification},
+                    {"source", e.source},
+                    {"since_utc", e.since_utc}});
+  }
+  return {{"tip", q.tip}, {"qualifications", list}};
+}
+
+JobQualifications job_qualifications_from_json(const nlohmann::json& j) {
+  JobQualifications q;
+  q.tip = j.at("tip").get<std::string>();
+  for (const nlohmann::json& e : j.at("qualifications")) {
+    QualificationInForce entry;
+    entry.ball_radius_mm = e.at("ball_radius_mm").get<double>();
+    entry.offset = vec_from(e.at("offset"));
+    if (const nlohmann::json& k = e.at("qualification"); !k.is_null()) {
+      hal::TipQualification t;
+      t.time_utc = k.at("time_utc").get<std::string>();
+      t.ball_radius_mm = k.at("ball_radius_mm").get<double>();
+      t.offset = vec_from(k.at("offset"));
+      t.residual_rms_mm = k.at("residual_rms_mm").get<double>();
+      t.touches = k.at("touches").get<int>();
+      entry.qualification = t;
+    }
+    entry.source = e.at("source").get<std::string>();
+    entry.since_utc = e.at("since_utc").get<std::string>();
+    q.list.push_back(std::move(entry));
+  }
+  if (q.list.empty()) throw std::invalid_argument("lists no qualification");
+  return q;
+}
+
+}  // namespace cmm::daemon
