@@ -125,6 +125,9 @@ void JobManager::set_state(Job& job, JobState state, const std::string& reason, 
 JobSink JobManager::sink_for(Job& job) {
   JobSink sink;
   sink.state = [this, &job](JobState state, const std::string& reason, const std::optional<JobFault>& fault) {
+    // A job's last motion is behind it when it announces that it ended or holds: the machine is
+    // free before anyone hears so, and a machine.home sent on that word is not refused as busy.
+    if (!is_running(state)) lease_.reset();
     std::lock_guard lock(mutex_);
     set_state(job, state, reason, fault);
   };
@@ -166,8 +169,9 @@ void JobManager::worker() {
       set_state(*head, JobState::failed, "request.json no longer parses: " + head->request_error, std::nullopt);
       continue;
     }
-    std::optional<MachineLink::Lease> lease = machine_.try_lease("job " + std::to_string(head->record.id));
-    if (!lease) {  // a manual home or qualification holds the machine for one call
+    if (std::optional<MachineLink::Lease> lease = machine_.try_lease("job " + std::to_string(head->record.id)))
+      lease_.emplace(std::move(*lease));
+    else {  // a manual home or qualification holds the machine for one call
       wake_.wait_for(lock, std::chrono::milliseconds(100));
       continue;
     }
@@ -194,7 +198,7 @@ void JobManager::worker() {
         spdlog::critical("job {}: cannot even record that it failed", head->record.id);
       }
     }
-    lease.reset();
+    lease_.reset();
     lock.lock();
     running_.reset();
   }

@@ -76,6 +76,9 @@ class JobManager {
   std::condition_variable wake_;
   std::map<int, std::unique_ptr<Job>> jobs_;
   std::optional<int> running_;
+  // The running job's hold on the machine; only the worker thread (and the job's sink, which runs
+  // on it) touches it.
+  std::optional<MachineLink::Lease> lease_;
   bool stopping_ = false;
   std::thread worker_;
 };

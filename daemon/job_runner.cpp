@@ -89,7 +89,12 @@ void JobRunner::prepare_machine(bool rehome) {
     cmm.reset();
     s = cmm.status();
   }
-  finish_touch_safely();
+  // A ball left on a search line it could not leave (a contact, a fault on the way out) must not be
+  // driven anywhere else: the job holds until the operator has cleared it.
+  if (const std::optional<std::string> stuck = finish_touch_safely())
+    throw Held{JobState::paused, "could not leave the touch a stop cut short: " + *stuck +
+                                     " (clear the probe by hand, then job.resume)",
+               JobFault{"Safety", *stuck}};
   if (const auto line = env_.machine.touch_in_progress(); line && !s.homed)
     // Homing raises z first: from a search line that is at most δ + pre-travel + overtravel off the
     // vertical the ball came down on, which the plan checked.
@@ -193,24 +198,26 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
   return reg;
 }
 
-void JobRunner::finish_touch_safely(bool clear_of_part) {
+std::optional<std::string> JobRunner::finish_touch_safely(bool clear_of_part) {
   const std::optional<SearchLine> line = env_.machine.touch_in_progress();
-  if (!line && !clear_of_part) return;
+  if (!line && !clear_of_part) return std::nullopt;
   try {
     // A stop dropped the driver to connected; enable it again to move out the way the ball came.
     env_.machine.bring_up();
     const hal::MachineStatus s = env_.machine.cmm().status();
-    if (!s.homed || s.aborted || s.estop) return;  // it cannot move now; the next mover leaves the line
+    if (!s.homed || s.aborted || s.estop) return std::nullopt;  // it cannot move now; the next mover leaves the line
     const planner::MachineDescription& d = env_.config.description;
     if (!line) {
       // Between touches the ball rests at the last one's search start, below the plane.
       rise_to_clearance(env_.machine.cmm(), d.clearance_z, {0, d.probe_speed_mm_s});
-      return;
+      return std::nullopt;
     }
     leave_touch(env_.machine.cmm(), line->start, line->direction, d.clearance_z, {0, d.probe_speed_mm_s});
     env_.machine.left_touch();
+    return std::nullopt;
   } catch (const std::exception& e) {
     spdlog::warn("job {}: could not leave the touch in progress: {}", id_, e.what());
+    return std::string(e.what());
   }
 }
 

@@ -71,8 +71,9 @@ class JobRunner {
   void check_stop() const;  // between the motions of one touch: a stop, a cancel, a shutdown
   hal::TouchResult touch(const planner::Touch& t, double clearance_z, double probe_speed_mm_s);
   // Leaves a touch a stop cut short along its search line; `clear_of_part` (a cancel) also rises to
-  // the clearance plane when no touch was in progress.
-  void finish_touch_safely(bool clear_of_part = false);
+  // the clearance plane when no touch was in progress. Never throws: what went wrong is returned
+  // (and logged), for a caller that must not move on without it.
+  std::optional<std::string> finish_touch_safely(bool clear_of_part = false);
 
   RunEnvironment env_;
   int id_;

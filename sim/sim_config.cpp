@@ -94,6 +94,7 @@ SimConfig sim_config_from_json(const nlohmann::json& j, const std::string& base_
     c.faults.reply_delay_s = f.number("reply_delay_s", 0, 0, 3600);
     c.faults.corrupt_reply_at_command = f.integer("corrupt_reply_at_command", 0, 0, 1 << 30);
     c.faults.spurious_trigger_at_motion = f.integer("spurious_trigger_at_motion", 0, 0, 1 << 30);
+    c.faults.spurious_trigger_count = f.integer("spurious_trigger_count", 1, 1, 1 << 30);
     c.faults.estop_at_s = f.number("estop_at_s", -1, -1, 1e9);
     f.finish();
   }

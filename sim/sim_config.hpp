@@ -40,6 +40,7 @@ struct FaultInjection {
   double reply_delay_s = 0;          // every reply arrives this late (a driver with a shorter timeout times out)
   int corrupt_reply_at_command = 0;  // the reply to this command (1-based) is garbled
   int spurious_trigger_at_motion = 0;  // the probe triggers at the start of this motion (1-based)
+  int spurious_trigger_count = 1;      // ... and of the motions after it, this many in all (a fouled stylus)
   double estop_at_s = -1;            // the e-stop input goes active when the machine clock passes this
 };
 

@@ -147,7 +147,8 @@ void SimulatedMachine::check_in_box(const Vec3& ball, const char* what) const {
 
 void SimulatedMachine::begin_command() {
   ++commands_;
-  spurious_pending_ = commands_ == config_.faults.spurious_trigger_at_motion;
+  const int first = config_.faults.spurious_trigger_at_motion;
+  spurious_pending_ = first > 0 && commands_ >= first && commands_ - first < config_.faults.spurious_trigger_count;
   abort_request_ = false;  // abort() latched aborted_ too, which check_can_move() has seen
 }
 

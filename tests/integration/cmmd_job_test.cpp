@@ -143,5 +143,35 @@ TEST(CmmdJob, ALinkDroppedMidJobPausesItWithCommLostAndResumeFinishesIt) {
   testing::wait_for_job(client, id, {"done"}, 900);
 }
 
+// A stylus that triggers at the start of a touch's move and again as the resume takes it back along
+// the search line: the ball must not be driven anywhere else from there. The job holds, saying so;
+// the next resume leaves the line and finishes.
+TEST(CmmdJob, AResumeThatCannotLeaveTheTouchInProgressHoldsTheJobInsteadOfMovingOn) {
+  const auto dir = scratch("stuck");
+  const auto scan = testing::sample_scan(dir / "scan");
+  json machine = testing::sample_sim_block();
+  machine["faults"] = {{"spurious_trigger_at_motion", 60}, {"spurious_trigger_count", 2}};
+  CmmdInstance cmmd(dir / "cmmd", machine);
+  cmmd.start();
+  daemon::RpcClient client = cmmd.client();
+  const int id = testing::submit_job(client, scan, {{"registration", testing::sample_measure_plate(dir / "scan")}});
+  const json tripped = testing::wait_for_job(client, id, {"paused"}, 600);
+  ASSERT_EQ(tripped["fault"]["kind"], "EarlyTrigger") << tripped.dump();
+  const auto line_file = cmmd.folder() / "state" / "touch_in_progress.json";
+  ASSERT_TRUE(std::filesystem::exists(line_file));
+
+  client.call("job.resume", {{"job", id}});
+  const json stuck = testing::wait_for_job(client, id, {"paused"}, 600);
+  ASSERT_FALSE(stuck["fault"].is_null()) << stuck.dump();
+  EXPECT_EQ(stuck["fault"]["kind"], "Safety") << stuck.dump();
+  EXPECT_NE(stuck["reason"].get<std::string>().find("could not leave the touch"), std::string::npos) << stuck.dump();
+  EXPECT_TRUE(std::filesystem::exists(line_file)) << "the search line must stay recorded for the next mover";
+
+  client.call("job.resume", {{"job", id}});
+  testing::wait_for_job(client, id, {"done"}, 900);
+  EXPECT_FALSE(std::filesystem::exists(line_file));
+  EXPECT_EQ(cmmd.terminate(), 0);
+}
+
 }  // namespace
 }  // namespace cmm
