@@ -23,6 +23,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cmmd_instance.hpp"
+#include "job_watch.hpp"
+#include "scratch_folder.hpp"
 #include "daemon/rpc_error.hpp"
 #include "daemon/touch_journal.hpp"
 #include "geometry/analytic_parts.hpp"
@@ -43,34 +45,9 @@ constexpr double wait_s = 120;
 // of machine time per touch) still takes seconds.
 constexpr double wall_time_scale = 100;
 
-// A test's folder, on tmpfs where there is one: every touch fsyncs the journal and the
-// touch-in-progress file, which on a disk costs more than the motion, and a SIGKILL loses nothing
-// the page cache holds. Removed when the test passed, kept for a look when it failed.
-struct Scratch {
-  explicit Scratch(const std::string& name) {
-    const bool shm = std::filesystem::is_directory("/dev/shm");
-    path = (shm ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path()) /
-           ("cmmd_crash_test_" + name + "_" + std::to_string(getpid()));
-    std::filesystem::remove_all(path);
-  }
-  ~Scratch() {
-    std::error_code ignored;
-    if (!::testing::Test::HasFailure()) std::filesystem::remove_all(path, ignored);
-  }
-  std::filesystem::path path;
+struct Scratch : testing::ScratchFolder {
+  explicit Scratch(const std::string& name) : ScratchFolder("cmmd_crash_test", name) {}
 };
-
-json sim_machine(double time_scale) {
-  json block = testing::sample_sim_block();
-  block["time_scale"] = time_scale;
-  return block;
-}
-
-// The sample job at 10 mm spacing: 176 touches instead of 712, every kind still there (plate,
-// edge, face and bore touches).
-json job_request(const std::filesystem::path& scan_folder) {
-  return {{"registration", testing::sample_measure_plate(scan_folder)}, {"seed", 1}, {"spacing_mm", 10}};
-}
 
 // cmmd.json's machine description for a cmm-sim over Modbus.
 json machine_description() { return {{"machine_description", CMMD_SOURCE_DIR "/config/machine.json"}}; }
@@ -78,14 +55,6 @@ json machine_description() { return {{"machine_description", CMMD_SOURCE_DIR "/c
 int uniform(std::mt19937& rng, int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); }
 
 geometry::Vec3 vec(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
-
-// plan.json's touch ids in machine order: the order a job makes them in, and so its journal's.
-std::vector<int> program_order(const std::filesystem::path& job_folder) {
-  const json plan = testing::read_json_file(job_folder / "plan.json");
-  std::vector<int> ids;
-  for (const json& t : plan.at("program")) ids.push_back(t.at("id").get<int>());
-  return ids;
-}
 
 double clearance_of(const std::filesystem::path& job_folder) {
   return testing::read_json_file(job_folder / "plan.json").at("clearance_z").get<double>();
@@ -120,7 +89,7 @@ Finished finished(daemon::RpcClient& client, const std::filesystem::path& job_fo
     if (h.at("status") == "measured") f.measured_holes.insert(h.at("id").get<int>());
   f.journal = testing::journal_touch_ids(job_folder);
   f.torn_tail = daemon::recover_journal(job_folder / "touches.jsonl").torn_tail;
-  f.program = program_order(job_folder);
+  f.program = testing::program_order(job_folder);
   return f;
 }
 
@@ -166,44 +135,9 @@ Finished uninterrupted(const std::filesystem::path& folder, const std::filesyste
   return f;
 }
 
-// Predicates on notifications ({"method", "params"}) about one job.
-using Match = std::function<bool(const json&)>;
-
-Match state_is(int job, const std::string& state) {
-  return [=](const json& n) {
-    return n.at("method") == "job.state" && n["params"].at("job") == job && n["params"].at("state") == state;
-  };
-}
-
-Match progress_at_least(int job, const std::string& phase, int done) {
-  return [=](const json& n) {
-    const json& p = n.at("params");
-    return n.at("method") == "job.progress" && p.at("job") == job && p.at("phase") == phase &&
-           p.at("done").get<int>() >= done;
-  };
-}
-
-Match touched(int job) {
-  return [=](const json& n) { return n.at("method") == "job.touch" && n["params"].at("job") == job; };
-}
-
 // Notifications until `match`; the job ending or holding first is a failure that says why.
-json await_job(daemon::RpcClient& watch, int job, const std::string& what, const Match& match) {
-  return testing::wait_for_notification(
-      watch, what,
-      [&](const json& n) {
-        if (match(n)) return true;
-        const json& p = n.at("params");
-        if (n.at("method") == "job.state" && p.at("job") == job) {
-          const std::string state = p.at("state");
-          if (state == "done" || state == "failed" || state == "cancelled" || state == "paused" ||
-              state == "interrupted")
-            throw std::runtime_error("job " + std::to_string(job) + " became " + state + " (" + p.value("reason", "") +
-                                     ") while waiting for " + what);
-        }
-        return false;
-      },
-      wait_s);
+json await_job(daemon::RpcClient& watch, int job, const std::string& what, const testing::NotificationMatch& match) {
+  return testing::await_job(watch, job, what, match, wait_s, testing::job_ended_or_held);
 }
 
 int total_of(const json& progress) { return progress.at("params").at("total").get<int>(); }
@@ -310,14 +244,14 @@ void kill_mid_touch(Cmmd& d, int job) {
     }
     if (attempt == 5) throw std::runtime_error("5 kills all came between touches");
     d.restart_and_resume(job, "probing");
-    await_job(d.watch(), job, "probing after the resume", state_is(job, "probing"));
+    await_job(d.watch(), job, "probing after the resume", testing::job_state_is(job, "probing"));
   }
 }
 
 TEST(CmmdCrash, KilledAtSeededMomentsOfOneJobItResumesToTheUninterruptedResult) {
   const Scratch dir("kill9");
   const auto scan = testing::sample_scan(dir.path / "scan");
-  const json request = job_request(dir.path / "scan");
+  const json request = testing::spaced_job_request(dir.path / "scan");
   const Finished baseline = uninterrupted(dir.path / "baseline", scan, request);
   ASSERT_FALSE(baseline.measured_edges.empty());
 
@@ -332,16 +266,16 @@ TEST(CmmdCrash, KilledAtSeededMomentsOfOneJobItResumesToTheUninterruptedResult) 
   const std::filesystem::path folder = d.job_folder(id);
   int kills = 0;
 
-  await_job(d.watch(), id, "planning", state_is(id, "planning"));
+  await_job(d.watch(), id, "planning", testing::job_state_is(id, "planning"));
   d.kill();
   ++kills;
   std::printf("killed while planning\n");
   d.restart_and_resume(id, "planning");
 
   // A plate touch's progress is reported as it starts: the kill lands in that touch.
-  const int plate_touches = total_of(await_job(d.watch(), id, "registering", progress_at_least(id, "registering", 0)));
+  const int plate_touches = total_of(await_job(d.watch(), id, "registering", testing::job_progress_at_least(id, "registering", 0)));
   const int plate_at = uniform(rng, 1, plate_touches - 1);
-  await_job(d.watch(), id, "plate touch " + std::to_string(plate_at), progress_at_least(id, "registering", plate_at));
+  await_job(d.watch(), id, "plate touch " + std::to_string(plate_at), testing::job_progress_at_least(id, "registering", plate_at));
   d.kill();
   ++kills;
   std::printf("killed in plate touch %d of %d\n", plate_at, plate_touches);
@@ -349,22 +283,22 @@ TEST(CmmdCrash, KilledAtSeededMomentsOfOneJobItResumesToTheUninterruptedResult) 
   d.restart_and_resume(id, "registering");
 
   // Probing: right after a touch and inside one, in turn, at seeded touch counts.
-  const int total = total_of(await_job(d.watch(), id, "probing", progress_at_least(id, "probing", 0)));
-  const std::vector<int> program = program_order(folder);
+  const int total = total_of(await_job(d.watch(), id, "probing", testing::job_progress_at_least(id, "probing", 0)));
+  const std::vector<int> program = testing::program_order(folder);
   ASSERT_EQ(static_cast<int>(program.size()), total);
   const std::string registration = read_text(folder / "registration.json");
   for (int i = 0; i < 4; ++i) {
     const int at = uniform(rng, total * i / 5 + 1, total * (i + 1) / 5);
     if (i % 2 == 0) {
-      await_job(d.watch(), id, "touch " + std::to_string(at), progress_at_least(id, "probing", at - 1));
-      const int touch = await_job(d.watch(), id, "a job.touch", touched(id))["params"]["touch"];
+      await_job(d.watch(), id, "touch " + std::to_string(at), testing::job_progress_at_least(id, "probing", at - 1));
+      const int touch = await_job(d.watch(), id, "a job.touch", testing::job_touched(id))["params"]["touch"];
       d.kill();
       std::printf("killed right after touch %d (about %d of %d)\n", touch, at, total);
       const std::vector<int> journal = testing::journal_touch_ids(folder);
       EXPECT_NE(std::find(journal.begin(), journal.end(), touch), journal.end())
           << "touch " << touch << " was notified but is not in touches.jsonl";
     } else {
-      await_job(d.watch(), id, "touch " + std::to_string(at), progress_at_least(id, "probing", at));
+      await_job(d.watch(), id, "touch " + std::to_string(at), testing::job_progress_at_least(id, "probing", at));
       kill_mid_touch(d, id);
       const std::size_t made = testing::journal_touch_ids(folder).size();
       EXPECT_EQ(program_index(folder, *d.touch_in_progress()), static_cast<int>(made))
@@ -374,7 +308,7 @@ TEST(CmmdCrash, KilledAtSeededMomentsOfOneJobItResumesToTheUninterruptedResult) 
     const std::vector<int> journal = testing::journal_touch_ids(folder);
     expect_program_prefix(journal, program, "after kill " + std::to_string(kills));
     d.restart_and_resume(id, "probing");
-    const int next = await_job(d.watch(), id, "the first touch after the resume", touched(id))["params"]["touch"];
+    const int next = await_job(d.watch(), id, "the first touch after the resume", testing::job_touched(id))["params"]["touch"];
     EXPECT_EQ(next, program.at(journal.size()))
         << "the resumed job did not go on from the first touch not in the journal";
   }
@@ -391,7 +325,7 @@ TEST(CmmdCrash, KilledAtSeededMomentsOfOneJobItResumesToTheUninterruptedResult) 
 TEST(CmmdCrash, CmmSimKilledMidMovePausesTheJobWithCommLostAndResumeOnTheSamePortFinishesIt) {
   const Scratch dir("simkill");
   const auto scan = testing::sample_scan(dir.path / "scan");
-  const json request = job_request(dir.path / "scan");
+  const json request = testing::spaced_job_request(dir.path / "scan");
   const std::filesystem::path sim_config = dir.path / "scan" / "sim.json";
   std::mt19937 rng(kill_seed);
   std::printf("kill seed %u\n", kill_seed);
@@ -400,9 +334,9 @@ TEST(CmmdCrash, CmmSimKilledMidMovePausesTheJobWithCommLostAndResumeOnTheSamePor
   Cmmd d(dir.path / "cmmd", testing::modbus_block(port), machine_description());
   d.start();
   const int id = testing::submit_job(d.client(), scan, request);
-  const int total = total_of(await_job(d.watch(), id, "probing", progress_at_least(id, "probing", 0)));
+  const int total = total_of(await_job(d.watch(), id, "probing", testing::job_progress_at_least(id, "probing", 0)));
   const int at = uniform(rng, total / 10, total / 4);
-  await_job(d.watch(), id, "touch " + std::to_string(at), progress_at_least(id, "probing", at));
+  await_job(d.watch(), id, "touch " + std::to_string(at), testing::job_progress_at_least(id, "probing", at));
   const json s = await_moving_below(d.client(), clearance_of(d.job_folder(id)));
   sim->process.signal(SIGKILL);
   sim->process.wait();
@@ -410,12 +344,12 @@ TEST(CmmdCrash, CmmSimKilledMidMovePausesTheJobWithCommLostAndResumeOnTheSamePor
   std::printf("killed cmm-sim moving, after %d of %d touches, the ball at z = %.3f\n", at, total,
               s["position"][2].get<double>());
 
-  await_job(d.watch(), id, "paused", state_is(id, "paused"));
+  await_job(d.watch(), id, "paused", testing::job_state_is(id, "paused"));
   const json paused = d.client().call("job.get", {{"job", id}});
   ASSERT_TRUE(paused.at("fault").is_object()) << paused.dump();
   EXPECT_EQ(paused["fault"].at("kind"), "CommLost") << paused.dump();
   EXPECT_TRUE(d.touch_in_progress()) << "the touch the link loss cut short is not recorded";
-  expect_program_prefix(testing::journal_touch_ids(d.job_folder(id)), program_order(d.job_folder(id)),
+  expect_program_prefix(testing::journal_touch_ids(d.job_folder(id)), testing::program_order(d.job_folder(id)),
                         "after the link loss");
 
   // The same port, motion in no wall time: the rest of the job takes no longer than it must.
@@ -466,7 +400,7 @@ void expect_leaves_along_the_search_line(Cmmd& d, int job, const json& touch_fil
   int samples = 0;
   for (;;) {
     if (const std::optional<json> n = d.watch().wait_notification(0)) {
-      if (touched(job)(*n)) break;
+      if (testing::job_touched(job)(*n)) break;
       const json& p = n->at("params");
       if (n->at("method") == "job.state" && p.at("job") == job && p.at("state") != "planning" &&
           p.at("state") != "registering" && p.at("state") != "probing")
@@ -505,19 +439,19 @@ TEST(CmmdCrash, CmmSimFrozenMidTouchPausesTheJobWithTimeoutAndResetAndResumeFini
   constexpr auto freeze = std::chrono::milliseconds(1500);
   Cmmd d(dir.path / "cmmd", machine, machine_description());
   d.start();
-  const int id = testing::submit_job(d.client(), scan, job_request(dir.path / "scan"));
+  const int id = testing::submit_job(d.client(), scan, testing::spaced_job_request(dir.path / "scan"));
   const std::filesystem::path folder = d.job_folder(id);
-  const int total = total_of(await_job(d.watch(), id, "probing", progress_at_least(id, "probing", 0)));
-  const std::vector<int> program = program_order(folder);
+  const int total = total_of(await_job(d.watch(), id, "probing", testing::job_progress_at_least(id, "probing", 0)));
+  const std::vector<int> program = testing::program_order(folder);
   for (const bool reset_first : {true, false}) {
     const int at = uniform(rng, total * (reset_first ? 1 : 3) / 5 + 1, total * (reset_first ? 2 : 4) / 5);
-    await_job(d.watch(), id, "touch " + std::to_string(at), progress_at_least(id, "probing", at));
+    await_job(d.watch(), id, "touch " + std::to_string(at), testing::job_progress_at_least(id, "probing", at));
     const json s = await_moving_below(d.client(), clearance_of(folder));
     sim.process.signal(SIGSTOP);
     const auto frozen = std::chrono::steady_clock::now();
     std::printf("froze cmm-sim after %d of %d touches, the ball moving at z = %.3f\n", at, total,
                 s["position"][2].get<double>());
-    await_job(d.watch(), id, "paused", state_is(id, "paused"));  // the driver gives up while it is frozen
+    await_job(d.watch(), id, "paused", testing::job_state_is(id, "paused"));  // the driver gives up while it is frozen
     std::this_thread::sleep_until(frozen + freeze);
     sim.process.signal(SIGCONT);
 
@@ -564,15 +498,15 @@ TEST(CmmdCrash, AJournalLineTornByTheCrashIsIgnoredAndItsTouchMadeAgainOnce) {
   testing::SimulatorProcess sim(dir.path / "scan" / "sim.json", wall_time_scale);
   Cmmd d(dir.path / "cmmd", testing::modbus_block(sim.port), machine_description());
   d.start();
-  const int id = testing::submit_job(d.client(), scan, job_request(dir.path / "scan"));
+  const int id = testing::submit_job(d.client(), scan, testing::spaced_job_request(dir.path / "scan"));
   const std::filesystem::path folder = d.job_folder(id), journal = folder / "touches.jsonl";
-  const int total = total_of(await_job(d.watch(), id, "probing", progress_at_least(id, "probing", 0)));
-  const std::vector<int> program = program_order(folder);
+  const int total = total_of(await_job(d.watch(), id, "probing", testing::job_progress_at_least(id, "probing", 0)));
+  const std::vector<int> program = testing::program_order(folder);
   // Half a line, as a crash inside the write leaves it; then no line, as a crash just before it.
   for (const bool torn : {true, false}) {
     const int at = uniform(rng, total * (torn ? 1 : 3) / 5 + 1, total * (torn ? 2 : 4) / 5);
-    await_job(d.watch(), id, "touch " + std::to_string(at), progress_at_least(id, "probing", at - 1));
-    await_job(d.watch(), id, "a job.touch", touched(id));
+    await_job(d.watch(), id, "touch " + std::to_string(at), testing::job_progress_at_least(id, "probing", at - 1));
+    await_job(d.watch(), id, "a job.touch", testing::job_touched(id));
     d.kill();
     const std::string text = read_text(journal);
     ASSERT_GE(text.size(), 2u);
@@ -584,7 +518,7 @@ TEST(CmmdCrash, AJournalLineTornByTheCrashIsIgnoredAndItsTouchMadeAgainOnce) {
     const std::vector<int> left = testing::journal_touch_ids(folder);
     expect_program_prefix(left, program, "with its last line lost");
     d.restart_and_resume(id, "probing");
-    const int next = await_job(d.watch(), id, "the first touch after the resume", touched(id))["params"]["touch"];
+    const int next = await_job(d.watch(), id, "the first touch after the resume", testing::job_touched(id))["params"]["touch"];
     EXPECT_EQ(next, lost) << "the touch whose line was lost is not the first one made again";
   }
   testing::wait_for_job(d.client(), id, {"done"}, wait_s);
@@ -595,18 +529,18 @@ TEST(CmmdCrash, AJournalLineTornByTheCrashIsIgnoredAndItsTouchMadeAgainOnce) {
 // A job on a fresh cmmd driving the in-process simulator in wall time, probing, past a seeded
 // touch count between a tenth and a quarter of its program.
 struct ProbingJob {
-  explicit ProbingJob(const std::string& name) : dir(name), d(dir.path / "cmmd", sim_machine(wall_time_scale)) {
+  explicit ProbingJob(const std::string& name) : dir(name), d(dir.path / "cmmd", testing::timed_sim_block(wall_time_scale)) {
     const auto scan = testing::sample_scan(dir.path / "scan");
     d.start();
-    id = testing::submit_job(d.client(), scan, job_request(dir.path / "scan"));
+    id = testing::submit_job(d.client(), scan, testing::spaced_job_request(dir.path / "scan"));
     folder = d.job_folder(id);
-    total = total_of(await_job(d.watch(), id, "probing", progress_at_least(id, "probing", 0)));
-    program = program_order(folder);
+    total = total_of(await_job(d.watch(), id, "probing", testing::job_progress_at_least(id, "probing", 0)));
+    program = testing::program_order(folder);
     await_touches(total / 10, total / 4);
   }
   // Until the job has made a seeded number of touches in [lo, hi].
   void await_touches(int lo, int hi) {
-    await_job(d.watch(), id, "probing", progress_at_least(id, "probing", uniform(rng, lo, hi)));
+    await_job(d.watch(), id, "probing", testing::job_progress_at_least(id, "probing", uniform(rng, lo, hi)));
   }
 
   Scratch dir;
@@ -628,7 +562,7 @@ TEST(CmmdJobControl, PauseMidTouchHoldsAfterItAStopMidTouchPausesAndResumeMakesE
   const std::optional<json> last_touch = d.touch_in_progress();
   const int paused_in = program_index(folder, paused_touch);
   ASSERT_GE(paused_in, 0) << "touch_in_progress.json is no touch of the plan: " << paused_touch.dump();
-  await_job(d.watch(), id, "paused", state_is(id, "paused"));
+  await_job(d.watch(), id, "paused", testing::job_state_is(id, "paused"));
   json record = d.client().call("job.get", {{"job", id}});
   EXPECT_EQ(record.at("reason"), "operator pause") << record.dump();
   EXPECT_TRUE(record.at("fault").is_null()) << record.dump();
@@ -647,14 +581,14 @@ TEST(CmmdJobControl, PauseMidTouchHoldsAfterItAStopMidTouchPausesAndResumeMakesE
   for (int attempt = 1;; ++attempt) {
     await_mid_touch(d, id);
     d.client().call("machine.stop");
-    await_job(d.watch(), id, "paused", state_is(id, "paused"));
+    await_job(d.watch(), id, "paused", testing::job_state_is(id, "paused"));
     record = d.client().call("job.get", {{"job", id}});
     EXPECT_EQ(record.at("reason"), "operator stop") << record.dump();
     EXPECT_FALSE(d.status().at("moving").get<bool>());
     if (d.touch_in_progress()) break;  // the stop cut a touch short, as meant
     ASSERT_LT(attempt, 5) << "5 stops all came between touches";
     d.client().call("job.resume", {{"job", id}});
-    await_job(d.watch(), id, "probing after the resume", state_is(id, "probing"));  // not the planning's moves
+    await_job(d.watch(), id, "probing after the resume", testing::job_state_is(id, "probing"));  // not the planning's moves
   }
   journal = testing::journal_touch_ids(folder);
   expect_program_prefix(journal, job.program, "after the stop");
@@ -669,7 +603,7 @@ TEST(CmmdJobControl, PauseMidTouchHoldsAfterItAStopMidTouchPausesAndResumeMakesE
 
 // A cancelled job ends with the ball still, on or above the clearance plane, no touch left open.
 void expect_cancelled_clear_of_the_part(Cmmd& d, int job) {
-  await_job(d.watch(), job, "cancelled", state_is(job, "cancelled"));
+  await_job(d.watch(), job, "cancelled", testing::job_state_is(job, "cancelled"));
   const json record = d.client().call("job.get", {{"job", job}});
   EXPECT_EQ(record.at("reason"), "cancelled by the operator") << record.dump();
   const json s = d.status();
@@ -677,7 +611,7 @@ void expect_cancelled_clear_of_the_part(Cmmd& d, int job) {
   EXPECT_GE(s.at("position").at(2).get<double>(), clearance_of(d.job_folder(job)) - 1e-3)
       << "the cancelled job left the ball below the clearance plane: " << s.dump();
   EXPECT_FALSE(d.touch_in_progress()) << "the cancelled job left a touch open";
-  expect_program_prefix(testing::journal_touch_ids(d.job_folder(job)), program_order(d.job_folder(job)),
+  expect_program_prefix(testing::journal_touch_ids(d.job_folder(job)), testing::program_order(d.job_folder(job)),
                         "after the cancel");
 }
 
@@ -697,13 +631,13 @@ TEST(CmmdJobControl, CancelBetweenTouchesLeavesTheBallOnTheClearancePlane) {
   const int id = job.id;
   const std::filesystem::path& folder = job.folder;
   d.client().call("job.pause", {{"job", id}});
-  await_job(d.watch(), id, "paused", state_is(id, "paused"));
+  await_job(d.watch(), id, "paused", testing::job_state_is(id, "paused"));
   const json held = d.status();
   ASSERT_LT(held.at("position").at(2).get<double>(), clearance_of(folder) - 1) << "nothing to prove: " << held.dump();
   const std::size_t made = testing::journal_touch_ids(folder).size();
 
   d.client().call("job.resume", {{"job", id}});
-  await_job(d.watch(), id, "planning", state_is(id, "planning"));
+  await_job(d.watch(), id, "planning", testing::job_state_is(id, "planning"));
   d.client().call("job.cancel", {{"job", id}});
   expect_cancelled_clear_of_the_part(d, id);
   EXPECT_EQ(testing::journal_touch_ids(folder).size(), made) << "the cancel came after the next touch began";
@@ -715,7 +649,7 @@ TEST(CmmdJobControl, CancelBetweenTouchesLeavesTheBallOnTheClearancePlane) {
 // qualification does not end that one.
 TEST(CmmdJobControl, AStopEndsAQualificationInProgressAndTheNextOneRuns) {
   const Scratch dir("qualify_stop");
-  Cmmd d(dir.path / "cmmd", sim_machine(20));  // a qualification takes about two seconds
+  Cmmd d(dir.path / "cmmd", testing::timed_sim_block(20));  // a qualification takes about two seconds
   d.start();
   d.client().call("machine.home", json::object(), wait_s);
   auto qualifying = std::async(std::launch::async, [&d] {

@@ -22,6 +22,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cmmd_instance.hpp"
+#include "job_watch.hpp"
+#include "scratch_folder.hpp"
 #include "geometry/analytic_parts.hpp"
 #include "geometry/true_edge_distance.hpp"
 #include "sim/sim_config.hpp"
@@ -35,19 +37,8 @@ using testing::CmmdInstance;
 constexpr double wait_s = 120;
 constexpr double wall_time_scale = 100;  // a kill lands mid-probing; the rest runs in no wall time
 
-struct Scratch {
-  explicit Scratch(const std::string& name) {
-    const bool shm = std::filesystem::is_directory("/dev/shm");
-    path = (shm ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path()) /
-           ("cmmd_qualification_test_" + name + "_" + std::to_string(getpid()));
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~Scratch() {
-    std::error_code ignored;
-    if (!::testing::Test::HasFailure()) std::filesystem::remove_all(path, ignored);
-  }
-  std::filesystem::path path;
+struct Scratch : testing::ScratchFolder {
+  explicit Scratch(const std::string& name) : ScratchFolder("cmmd_qualification_test", name) {}
 };
 
 // The sample machine, its tip T1 off its nominal offset by 20 µm: what only a qualification finds.
@@ -61,45 +52,9 @@ json sim_block() {
 
 geometry::Vec3 vec(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
 
-using Match = std::function<bool(const json&)>;
-
-Match state_is(int job, const std::string& state) {
-  return [=](const json& n) {
-    return n.at("method") == "job.state" && n["params"].at("job") == job && n["params"].at("state") == state;
-  };
-}
-
-Match probing_done(int job, int done) {
-  return [=](const json& n) {
-    const json& p = n.at("params");
-    return n.at("method") == "job.progress" && p.at("job") == job && p.at("phase") == "probing" &&
-           p.at("done").get<int>() >= done;
-  };
-}
-
-json await_job(daemon::RpcClient& watch, int job, const std::string& what, const Match& match) {
-  return testing::wait_for_notification(
-      watch, what,
-      [&](const json& n) {
-        if (match(n)) return true;
-        const json& p = n.at("params");
-        if (n.at("method") == "job.state" && p.at("job") == job) {
-          const std::string state = p.at("state");
-          if (state == "done" || state == "failed" || state == "cancelled")
-            throw std::runtime_error("job " + std::to_string(job) + " became " + state + " (" + p.value("reason", "") +
-                                     ") while waiting for " + what);
-        }
-        return false;
-      },
-      wait_s);
-}
-
-// A job that has just reported its hold still holds the machine for as long as its run takes to
-// return; a manual command waits for that rather than get −32012.
-void await_machine_free(daemon::RpcClient& client) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_s);
-  while (client.call("machine.status").contains("holder"))
-    if (std::chrono::steady_clock::now() > deadline) throw std::runtime_error("the machine stays held");
+// Notifications until `match`; the job ending first is a failure that says how.
+json await_job(daemon::RpcClient& watch, int job, const std::string& what, const testing::NotificationMatch& match) {
+  return testing::await_job(watch, job, what, match, wait_s, testing::job_ended);
 }
 
 // The result against the simulator's true part: every measured edge point within 10 µm of a true
@@ -157,13 +112,13 @@ struct RestartedController {
     if (requalify) request["requalify"] = true;
     id = testing::submit_job(*client, scan, request);
     folder = cmmd.job_folder(id);
-    total = await_job(*watch, id, "probing", probing_done(id, 0))["params"]["total"];
-    await_job(*watch, id, "a quarter of the touches", probing_done(id, total / 4));
+    total = await_job(*watch, id, "probing", testing::job_progress_at_least(id, "probing", 0))["params"]["total"];
+    await_job(*watch, id, "a quarter of the touches", testing::job_progress_at_least(id, "probing", total / 4));
     const int port = sim->port;
     sim->process.signal(SIGKILL);
     sim->process.wait();
     sim.reset();
-    await_job(*watch, id, "the pause for the lost link", state_is(id, "paused"));
+    await_job(*watch, id, "the pause for the lost link", testing::job_state_is(id, "paused"));
     const json paused = client->call("job.get", {{"job", id}});
     EXPECT_EQ(paused.at("fault").value("kind", ""), "CommLost") << paused.dump();
     before = testing::journal_touch_ids(folder).size();
@@ -215,7 +170,7 @@ struct RestartedController {
 TEST(CmmdQualification, AJobWhoseTipLostItsQualificationPausesForItAndFinishesOnTheTrueEdgesAfterMachineQualify) {
   RestartedController c("operator", false);
   c.client->call("job.resume", {{"job", c.id}});
-  await_job(*c.watch, c.id, "the pause for the qualification", state_is(c.id, "paused"));
+  await_job(*c.watch, c.id, "the pause for the qualification", testing::job_state_is(c.id, "paused"));
   const json held = c.client->call("job.get", {{"job", c.id}});
   EXPECT_EQ(held.at("reason"), "tip T1's qualification vanished since the job began: machine.qualify, then job.resume")
       << held.dump();
@@ -223,11 +178,11 @@ TEST(CmmdQualification, AJobWhoseTipLostItsQualificationPausesForItAndFinishesOn
   EXPECT_EQ(testing::journal_touch_ids(c.folder).size(), c.before) << "a touch was made with the tip unqualified";
   // Resumed without qualifying: it holds again; nothing is made with the nominal tip.
   c.client->call("job.resume", {{"job", c.id}});
-  await_job(*c.watch, c.id, "the pause again", state_is(c.id, "paused"));
+  await_job(*c.watch, c.id, "the pause again", testing::job_state_is(c.id, "paused"));
   EXPECT_EQ(c.client->call("job.get", {{"job", c.id}}).at("reason"), held.at("reason"));
   EXPECT_EQ(testing::journal_touch_ids(c.folder).size(), c.before);
 
-  await_machine_free(*c.client);
+  // The job let the machine go before it announced the hold: the operator's qualify is not busy.
   const json second = c.client->call("machine.qualify", json::object(), wait_s);
   c.client->call("job.resume", {{"job", c.id}});
   testing::wait_for_job(*c.client, c.id, {"done"}, wait_s);

@@ -21,6 +21,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cmmd_instance.hpp"
+#include "job_watch.hpp"
+#include "scratch_folder.hpp"
 #include "daemon/base64.hpp"
 #include "daemon/rpc_error.hpp"
 #include "daemon/sha256.hpp"
@@ -38,42 +40,12 @@ constexpr double wait_s = 120;
 constexpr double wall_time_scale = 100;  // about 10 ms of wall time per touch: the job is still running when the disk fills
 constexpr std::uint64_t state_disk_bytes = 64u << 20;
 
-// A test's folder on /dev/shm where there is one (the journal fsyncs per touch); kept when it failed.
-struct Scratch {
-  explicit Scratch(const std::string& name) {
-    const bool shm = std::filesystem::is_directory("/dev/shm");
-    path = (shm ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path()) /
-           ("cmmd_storage_test_" + name + "_" + std::to_string(getpid()));
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~Scratch() {
-    std::error_code ignored;
-    if (!::testing::Test::HasFailure()) std::filesystem::remove_all(path, ignored);
-  }
-  std::filesystem::path path;
+struct Scratch : testing::ScratchFolder {
+  explicit Scratch(const std::string& name) : ScratchFolder("cmmd_storage_test", name) {}
 };
 
 #define MOUNT_OR_SKIP(disk) \
   if (!(disk).mounted()) GTEST_SKIP() << (disk).error()
-
-json sim_machine(double time_scale) {
-  json block = testing::sample_sim_block();
-  block["time_scale"] = time_scale;
-  return block;
-}
-
-// The sample job at 10 mm spacing (176 touches), the plate measured on the machine.
-json job_request(const std::filesystem::path& scan_folder) {
-  return {{"registration", testing::sample_measure_plate(scan_folder)}, {"seed", 1}, {"spacing_mm", 10}};
-}
-
-std::vector<int> program_order(const std::filesystem::path& job_folder) {
-  const json plan = testing::read_json_file(job_folder / "plan.json");
-  std::vector<int> ids;
-  for (const json& t : plan.at("program")) ids.push_back(t.at("id").get<int>());
-  return ids;
-}
 
 // What a finished job measured: its journal (the touches in the order made) and its result.
 struct Measured {
@@ -87,7 +59,7 @@ Measured measured(daemon::RpcClient& client, const std::filesystem::path& job_fo
   const daemon::Recovery r = daemon::recover_journal(job_folder / "touches.jsonl");
   EXPECT_FALSE(r.torn_tail) << "touches.jsonl ends in a torn line";
   m.journal = r.entries;
-  m.program = program_order(job_folder);
+  m.program = testing::program_order(job_folder);
   m.result = client.call("job.result", {{"job", job}});
   return m;
 }
@@ -103,7 +75,7 @@ std::vector<int> ids_of(const std::vector<daemon::JournalEntry>& journal) {
 const Measured& uninterrupted(const std::filesystem::path& scan, const json& request) {
   static const Measured once = [&] {
     const Scratch dir("baseline");
-    CmmdInstance cmmd(dir.path / "cmmd", sim_machine(0));
+    CmmdInstance cmmd(dir.path / "cmmd", testing::timed_sim_block(0));
     cmmd.start();
     daemon::RpcClient client = cmmd.client();
     const int id = testing::submit_job(client, scan, request);
@@ -133,38 +105,9 @@ void expect_same_touches(const Measured& got, const Measured& want) {
     EXPECT_EQ(got.result["edge_points"][i]["measured_M"], want.result["edge_points"][i]["measured_M"]) << "edge point " << i;
 }
 
-using Match = std::function<bool(const json&)>;
-
-Match state_is(int job, const std::string& state) {
-  return [=](const json& n) {
-    return n.at("method") == "job.state" && n["params"].at("job") == job && n["params"].at("state") == state;
-  };
-}
-
-Match probing_done(int job, int done) {
-  return [=](const json& n) {
-    const json& p = n.at("params");
-    return n.at("method") == "job.progress" && p.at("job") == job && p.at("phase") == "probing" &&
-           p.at("done").get<int>() >= done;
-  };
-}
-
 // Notifications until `match`; the job ending first is a failure that says how.
-json await_job(daemon::RpcClient& watch, int job, const std::string& what, const Match& match) {
-  return testing::wait_for_notification(
-      watch, what,
-      [&](const json& n) {
-        if (match(n)) return true;
-        const json& p = n.at("params");
-        if (n.at("method") == "job.state" && p.at("job") == job) {
-          const std::string state = p.at("state");
-          if (state == "done" || state == "failed" || state == "cancelled")
-            throw std::runtime_error("job " + std::to_string(job) + " became " + state + " (" + p.value("reason", "") +
-                                     ") while waiting for " + what);
-        }
-        return false;
-      },
-      wait_s);
+json await_job(daemon::RpcClient& watch, int job, const std::string& what, const testing::NotificationMatch& match) {
+  return testing::await_job(watch, job, what, match, wait_s, testing::job_ended);
 }
 
 // A job held for the disk: paused, its reason and fault naming the file and ENOSPC, and job.json on
@@ -197,30 +140,30 @@ double machine_clock(daemon::RpcClient& client) { return client.call("machine.st
 TEST(CmmdStorage, AFullDiskPausesTheJobBeforeATouchAndAtItsResultAndTheResumesLoseAndRepeatNoTouch) {
   const Scratch dir("job");
   const auto scan = testing::sample_scan(dir.path / "scan");
-  const json request = job_request(dir.path / "scan");
+  const json request = testing::spaced_job_request(dir.path / "scan");
   test::SmallTmpfs disk(dir.path / "cmmd" / "state", state_disk_bytes);
   MOUNT_OR_SKIP(disk);
   const Measured& want = uninterrupted(scan, request);
 
-  CmmdInstance cmmd(dir.path / "cmmd", sim_machine(wall_time_scale));
+  CmmdInstance cmmd(dir.path / "cmmd", testing::timed_sim_block(wall_time_scale));
   cmmd.start();
   daemon::RpcClient client = cmmd.client(), watch = cmmd.client();
   watch.call("server.subscribe", {{"topics", {"job"}}});
   const int id = testing::submit_job(client, scan, request);
   const std::filesystem::path folder = cmmd.job_folder(id);
-  const int total = await_job(watch, id, "probing", probing_done(id, 0))["params"]["total"];
+  const int total = await_job(watch, id, "probing", testing::job_progress_at_least(id, "probing", 0))["params"]["total"];
 
   // Full a third of the way through: the next touch cannot record itself, so it does not begin.
-  await_job(watch, id, "a third of the touches", probing_done(id, total / 3));
+  await_job(watch, id, "a third of the touches", testing::job_progress_at_least(id, "probing", total / 3));
   disk.fill();
-  await_job(watch, id, "the hold for the full disk", state_is(id, "paused"));
+  await_job(watch, id, "the hold for the full disk", testing::job_state_is(id, "paused"));
   const json held = expect_held_for_storage(client, folder, id);
   std::printf("full after %zu of %d touches: %s\n", testing::journal_touch_ids(folder).size(), total,
               held["reason"].get<std::string>().c_str());
   // Resumed while still full: it holds again at once, having made no touch.
   const std::size_t made = testing::journal_touch_ids(folder).size();
   client.call("job.resume", {{"job", id}});
-  await_job(watch, id, "the hold again", state_is(id, "paused"));
+  await_job(watch, id, "the hold again", testing::job_state_is(id, "paused"));
   expect_held_for_storage(client, folder, id);
   EXPECT_EQ(testing::journal_touch_ids(folder).size(), made) << "a touch was made on a full disk";
   expect_no_half_files(folder);
@@ -229,19 +172,19 @@ TEST(CmmdStorage, AFullDiskPausesTheJobBeforeATouchAndAtItsResultAndTheResumesLo
 
   // Full again once nearly every touch is made, with a few pages left for those: the result files
   // are what no longer fit (the merged cloud alone is far larger).
-  await_job(watch, id, "the last touches", probing_done(id, total - 20));
+  await_job(watch, id, "the last touches", testing::job_progress_at_least(id, "probing", total - 20));
   client.call("job.pause", {{"job", id}});
-  await_job(watch, id, "the operator's pause", state_is(id, "paused"));
+  await_job(watch, id, "the operator's pause", testing::job_state_is(id, "paused"));
   disk.fill(32 * 1024);
   client.call("job.resume", {{"job", id}});
-  await_job(watch, id, "the hold at the result", state_is(id, "paused"));
+  await_job(watch, id, "the hold at the result", testing::job_state_is(id, "paused"));
   const json at_result = expect_held_for_storage(client, folder, id);
   const std::string reason = at_result["reason"];
   std::printf("full at the result: %s\n", reason.c_str());
   EXPECT_TRUE(reason.find("result.csv") != std::string::npos || reason.find("result.holes.csv") != std::string::npos ||
               reason.find("merged.ply") != std::string::npos || reason.find("result.json") != std::string::npos)
       << reason;
-  EXPECT_EQ(testing::journal_touch_ids(folder), program_order(folder)) << "not every touch was made before the result";
+  EXPECT_EQ(testing::journal_touch_ids(folder), testing::program_order(folder)) << "not every touch was made before the result";
   EXPECT_FALSE(std::filesystem::exists(folder / "result.json"));
   expect_no_half_files(folder);
 
@@ -260,24 +203,24 @@ TEST(CmmdStorage, AFullDiskPausesTheJobBeforeATouchAndAtItsResultAndTheResumesLo
 TEST(CmmdStorage, ATouchTheJournalHadNoRoomForIsKeptAndJournalledByTheResumeNotMadeAgain) {
   const Scratch dir("journal");
   const auto scan = testing::sample_scan(dir.path / "scan");
-  const json request = job_request(dir.path / "scan");
+  const json request = testing::spaced_job_request(dir.path / "scan");
   test::SmallTmpfs disk(dir.path / "cmmd" / "state" / "jobs", state_disk_bytes);
   MOUNT_OR_SKIP(disk);
   const Measured& want = uninterrupted(scan, request);
 
-  CmmdInstance cmmd(dir.path / "cmmd", sim_machine(wall_time_scale));
+  CmmdInstance cmmd(dir.path / "cmmd", testing::timed_sim_block(wall_time_scale));
   cmmd.start();
   daemon::RpcClient client = cmmd.client(), watch = cmmd.client();
   watch.call("server.subscribe", {{"topics", {"job"}}});
   const int id = testing::submit_job(client, scan, request);
   const std::filesystem::path folder = cmmd.job_folder(id);
-  const int total = await_job(watch, id, "probing", probing_done(id, 0))["params"]["total"];
-  await_job(watch, id, "a third of the touches", probing_done(id, total / 3));
+  const int total = await_job(watch, id, "probing", testing::job_progress_at_least(id, "probing", 0))["params"]["total"];
+  await_job(watch, id, "a third of the touches", testing::job_progress_at_least(id, "probing", total / 3));
   disk.fill();  // the journal's last page still takes a few lines; the line after does not fit
-  await_job(watch, id, "the hold for the full disk", state_is(id, "paused"));
+  await_job(watch, id, "the hold for the full disk", testing::job_state_is(id, "paused"));
   const json held = expect_held_for_storage(client, folder, id);
   EXPECT_NE(held["reason"].get<std::string>().find("touches.jsonl"), std::string::npos) << held.dump();
-  const std::vector<int> journal = testing::journal_touch_ids(folder), program = program_order(folder);
+  const std::vector<int> journal = testing::journal_touch_ids(folder), program = testing::program_order(folder);
   ASSERT_LT(journal.size(), program.size());
   std::printf("the journal full after %zu of %d touches: %s\n", journal.size(), total, held["reason"].get<std::string>().c_str());
 
@@ -310,7 +253,7 @@ TEST(CmmdStorage, AnUploadAndASubmitOnAFullDiskAreStorageFullAndLeaveNothingHalf
   const auto scan = testing::sample_scan(dir.path / "scan");
   test::SmallTmpfs disk(dir.path / "cmmd" / "state", state_disk_bytes);
   MOUNT_OR_SKIP(disk);
-  CmmdInstance cmmd(dir.path / "cmmd", sim_machine(0));
+  CmmdInstance cmmd(dir.path / "cmmd", testing::timed_sim_block(0));
   cmmd.start();
   daemon::RpcClient client = cmmd.client();
 
@@ -334,7 +277,7 @@ TEST(CmmdStorage, AnUploadAndASubmitOnAFullDiskAreStorageFullAndLeaveNothingHalf
   ASSERT_TRUE(done.at("complete").get<bool>()) << done.dump();
 
   disk.fill();
-  json request = job_request(dir.path / "scan");
+  json request = testing::spaced_job_request(dir.path / "scan");
   request["model"] = done.at("model");
   const daemon::RpcError submit = storage_full_of([&] { client.call("job.submit", request); });
   EXPECT_NE(submit.data().value("file", "").find("jobs/000001"), std::string::npos) << submit.data().dump();
