@@ -1,0 +1,51 @@
+// cmmd.json's reader on what an operator may write by mistake: every problem is a hal::ConfigError
+// naming its JSON Pointer, never another exception (which would end cmmd without saying where).
+#include "daemon/daemon_config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "hal/config_block.hpp"
+
+namespace cmm::daemon {
+namespace {
+
+using nlohmann::json;
+
+std::vector<std::string> problems_of(const json& config) {
+  try {
+    daemon_config_from_json(config, "cmmd.json", ".");
+  } catch (const hal::ConfigError& e) {
+    return e.problems();
+  }
+  return {};
+}
+
+bool names(const std::vector<std::string>& problems, const std::string& text) {
+  return std::any_of(problems.begin(), problems.end(), [&](const std::string& p) { return p.find(text) != std::string::npos; });
+}
+
+// Found by the daemon_config fuzz target (corpus/daemon_config/crash-655195b6…): a driver that is
+// no string threw nlohmann's type_error out of the reader.
+TEST(DaemonConfig, ADriverThatIsNoStringIsAProblemAtItsPointer) {
+  for (const json& driver : {json(0.001), json(true), json::array({"sim"}), json::object()}) {
+    const auto problems = problems_of({{"machine", {{"driver", driver}}}});
+    EXPECT_TRUE(names(problems, "/machine/driver: must be a string")) << driver.dump() << ": " << ::testing::PrintToString(problems);
+  }
+}
+
+TEST(DaemonConfig, AnUnknownDriverIsAProblemListingTheKnownOnes) {
+  const auto problems = problems_of({{"machine", {{"driver", "ethercat"}}}});
+  EXPECT_TRUE(names(problems, "/machine/driver: must be one of grbl, modbus, serial, sim, not \"ethercat\""))
+      << ::testing::PrintToString(problems);
+}
+
+TEST(DaemonConfig, SerialIsTheGrblDriverAndNoDriverIsTheSimulator) {
+  EXPECT_EQ(daemon_config_from_json({{"machine", {{"driver", "serial"}, {"port", "/dev/ttyUSB0"}}}}, "cmmd.json", ".").driver,
+            "grbl");
+  EXPECT_EQ(daemon_config_from_json({{"machine", json::object()}}, "cmmd.json", ".").driver, "sim");
+}
+
+}  // namespace
+}  // namespace cmm::daemon
