@@ -114,13 +114,18 @@ nlohmann::json short_timeouts(int port) {
           {"heartbeat_timeout_s", 0.5}};
 }
 
-TEST(ModbusReconnect, AMachineFrozenMidMotionDropsTheLinkAndNoLateAnswerIsReadAsTheNextOnes) {
-  FrozenSim rig;
-  hal::ModbusCmm cmm;
+// The driver on the rig with short_timeouts, enabled and homed: where each freeze begins.
+void bring_up(hal::ModbusCmm& cmm, const FrozenSim& rig) {
   cmm.configure(short_timeouts(rig.port));
   cmm.connect();
   cmm.enable();
   cmm.home();
+}
+
+TEST(ModbusReconnect, AMachineFrozenMidMotionDropsTheLinkAndNoLateAnswerIsReadAsTheNextOnes) {
+  FrozenSim rig;
+  hal::ModbusCmm cmm;
+  bring_up(cmm, rig);
   const hal::Vec3 far(300, 400, 100), near(300, 400, 150);
   auto moving = std::async(std::launch::async, [&] { cmm.move({far, 0}); });
   while (!cmm.status().moving) ASSERT_NE(moving.wait_for(std::chrono::milliseconds(1)), std::future_status::ready);
@@ -154,10 +159,7 @@ TEST(ModbusReconnect, AMachineFrozenMidMotionDropsTheLinkAndNoLateAnswerIsReadAs
 TEST(ModbusReconnect, ABeatLeftUnansweredWhileIdleDropsTheLinkAndConnectBringsItBack) {
   FrozenSim rig;
   hal::ModbusCmm cmm;
-  cmm.configure(short_timeouts(rig.port));
-  cmm.connect();
-  cmm.enable();
-  cmm.home();
+  bring_up(cmm, rig);
   const hal::Vec3 home = cmm.status().position;
   rig.freeze();
   rig.let_go(std::chrono::milliseconds(700));  // a beat went out and was given up on
