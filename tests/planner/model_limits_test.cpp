@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "geometry/analytic_parts.hpp"
+#include "geometry/mesh_io.hpp"
 #include "planner/machine.hpp"
 
 namespace cmm::planner {
@@ -26,6 +27,22 @@ TEST(ModelLimits, ThePartsOfTheTestsFitTheDefaultMachine) {
   const AxisBox box = default_machine().travel_box;
   for (const std::string& name : geometry::analytic_part_names())
     EXPECT_EQ(refusal(geometry::make_analytic_part(name, 2).mesh, box), "") << name;
+}
+
+// Meshes nobody on the project made (tests/data: a CAD export, an open scanned blade) and a CAD
+// box of 12 triangles almost as large as the travel box: the gate must not refuse real parts.
+TEST(ModelLimits, RealMeshesAndAFewHugeTrianglesScaledToAPartFitTheDefaultMachine) {
+  const AxisBox box = default_machine().travel_box;
+  for (const char* name : {"fandisk.ply", "blade.ply"}) {
+    geometry::TriangleMesh mesh = geometry::read_mesh(std::string(CMMD_TEST_DATA_DIR) + "/" + name);
+    const double extent = (mesh.vertices.colwise().maxCoeff() - mesh.vertices.colwise().minCoeff()).maxCoeff();
+    mesh.vertices *= 200 / extent;  // 200 mm across, wherever the file put it
+    EXPECT_EQ(refusal(mesh, box), "") << name;
+  }
+  const double side = 0.9 * (box.max - box.min).minCoeff();
+  const geometry::TriangleMesh block = geometry::make_cube(side, side).mesh;  // the coarsest tessellation
+  EXPECT_LE(block.faces.rows(), 12 * 4);
+  EXPECT_EQ(refusal(block, box), "");
 }
 
 TEST(ModelLimits, AStrayVertexIsNamedWithWhereItIs) {
