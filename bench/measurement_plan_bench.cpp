@@ -9,7 +9,7 @@
 #include "geometry/analytic_parts.hpp"
 #include "geometry/feature_model.hpp"
 #include "geometry/mesh_io.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/measurement_plan.hpp"
 
 namespace {
@@ -47,8 +47,8 @@ planner::MeasurementPlanOptions plan_options() {
   return options;
 }
 
-planner::MachineDescription machine() {
-  planner::MachineDescription m = planner::default_machine();
+description::MachineDescription machine() {
+  description::MachineDescription m = description::default_machine();
   m.active_tip = "T2";
   return m;
 }
@@ -71,7 +71,7 @@ void bm_extract_features(benchmark::State& state) {
 void bm_plan_measurement(benchmark::State& state) {
   const geometry::TriangleMesh mesh = read_block(state.range(0));
   const geometry::FeatureModel model = features(mesh, state.range(1));
-  const planner::MachineDescription m = machine();
+  const description::MachineDescription m = machine();
   planner::MeasurementPlan plan;
   for (auto _ : state)
     plan = planner::plan_measurement(model, mesh, Eigen::Isometry3d::Identity(), m, plan_options());

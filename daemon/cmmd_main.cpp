@@ -22,7 +22,7 @@
 #include "daemon/rpc_server.hpp"
 #include "daemon/service_methods.hpp"
 #include "daemon/service_notifier.hpp"
-#include "hal/config_block.hpp"
+#include "hal/description/json_fields.hpp"
 
 #ifndef CMMD_VERSION
 #define CMMD_VERSION "0.0.0"
@@ -143,10 +143,10 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
         server->set_tokens(next.server.tokens);
         spdlog::info("SIGHUP: reloaded {} (log level {}, {} token(s))", config_file.string(), next.log_level,
                      next.server.tokens.size());
-      } catch (const hal::ConfigError& e) {
+      } catch (const description::FieldError& e) {
         // One line: the journal keeps each line as its own entry, and the reasons belong with the error.
         std::string problems;
-        for (const std::string& problem : e.problems()) problems += (problems.empty() ? "" : "; ") + problem;
+        for (const std::string& line : e.lines()) problems += (problems.empty() ? "" : "; ") + line;
         spdlog::error("SIGHUP: {} refused, running on: {}", config_file.string(), problems);
       }
       notifier.ready("ready");
@@ -219,7 +219,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     return serve(std::filesystem::absolute(config_file), std::move(config));
-  } catch (const hal::ConfigError& e) {
+  } catch (const description::FieldError& e) {
     std::cerr << "cmmd: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {

@@ -1,12 +1,13 @@
+// cmmd.json read in one pass: the server, the folders, the log, the machine (whose block its driver
+// reads), the descriptions jobs are planned for, and the job defaults.
 #include "daemon/daemon_config.hpp"
 
 #include <cstdlib>
-#include <fstream>
 
 #include <asio/ip/address.hpp>
 
-#include "hal/config_block.hpp"
-#include "sim/sim_config.hpp"
+#include "daemon/driver_factory.hpp"
+#include "hal/description/json_fields.hpp"
 
 namespace cmm::daemon {
 
@@ -21,13 +22,13 @@ std::filesystem::path from_environment(const char* variable, const std::filesyst
   return first;
 }
 
-void read_server(hal::ConfigBlock& b, DaemonConfig& c) {
+void read_server(description::JsonFields& b, DaemonConfig& c) {
   ServerOptions& s = c.server;
   s.tcp_bind = b.text("tcp_bind", s.tcp_bind);
   s.tcp_port = b.integer("tcp_port", s.tcp_port, 0, 65535);
   s.tcp_enabled = b.flag("tcp_enabled", s.tcp_enabled);
   const std::string socket = b.text("unix_socket", "cmmd.sock");
-  s.unix_path = socket.empty() ? std::string() : hal::resolve_config_path(socket, c.runtime_dir).string();
+  s.unix_path = socket.empty() ? std::string() : description::resolve_config_path(socket, c.runtime_dir).string();
   const std::string mode = b.text("unix_mode", "0660");
   try {
     std::size_t used = 0;
@@ -57,7 +58,7 @@ void read_server(hal::ConfigBlock& b, DaemonConfig& c) {
   if (s.workers.max_waiting_bytes < s.max_request_bytes)
     b.problem("max_waiting_request_bytes", "must be at least max_request_bytes, or a request of that size never runs");
   s.tokens.clear();
-  for (hal::ConfigBlock token : b.objects("tokens")) {
+  for (description::JsonFields token : b.objects("tokens")) {
     AccessToken t;
     t.token = token.text("token", "");
     if (t.token.size() < 16) token.problem("token", "must be at least 16 characters");
@@ -81,48 +82,51 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string&
                                      const std::filesystem::path& base_dir) {
   DaemonConfig c;
   c.source = source;
-  hal::ConfigBlock block(j);
-  hal::ConfigBlock server = block.object("server");
+  description::JsonFields block(j);
+  block.expect_object();
+  description::JsonFields server = block.object("server");
   c.state_dir =
-      from_environment("STATE_DIRECTORY", hal::resolve_config_path(block.text("state_dir", "/var/lib/cmmd"), base_dir));
+      from_environment("STATE_DIRECTORY", description::resolve_config_path(block.text("state_dir", "/var/lib/cmmd"), base_dir));
   c.runtime_dir =
-      from_environment("RUNTIME_DIRECTORY", hal::resolve_config_path(block.text("runtime_dir", "/run/cmmd"), base_dir));
-  c.models_dir = hal::resolve_config_path(block.text("models_dir", ""), base_dir);
+      from_environment("RUNTIME_DIRECTORY", description::resolve_config_path(block.text("runtime_dir", "/run/cmmd"), base_dir));
+  c.models_dir = description::resolve_config_path(block.text("models_dir", ""), base_dir);
   read_server(server, c);
   {
-    hal::ConfigBlock log = block.object("log");
+    description::JsonFields log = block.object("log");
     c.log_level = log.text("level", "info", {"trace", "debug", "info", "warn", "error", "critical", "off"});
     log.finish();
   }
-  if (const nlohmann::json* machine = block.raw("machine")) {
-    if (!machine->is_object()) {
-      block.problem("machine", "must be an object: the driver's block, with \"driver\"");
-    } else {
-      c.machine = *machine;
-      // Only the driver's name is read here (a bad one a problem, as any key's); the rest of the
-      // block is the driver's reader's, which names its own unknown keys.
-      hal::ConfigBlock named = block.object("machine");
-      const std::string driver = named.text("driver", "sim", {"sim", "modbus", "grbl", "serial"});
-      // "serial" is the name for the Grbl serial driver; the driver block knows it as grbl.
-      c.driver = driver == "serial" ? "grbl" : driver;
-      c.machine["driver"] = c.driver;
-    }
-  }
-  // What jobs are planned for: the named description, else the simulator's own, else the default.
-  planner::MachineDescription fallback = planner::default_machine();
-  if (c.driver == "sim") {
-    try {
-      fallback = sim::sim_config_from_json(c.machine, base_dir.string()).machine;
-    } catch (const hal::ConfigError& e) {
-      for (const std::string& p : e.problems()) block.problem("machine", p);
-    }
-  }
-  c.description = hal::described(block, "machine_description", fallback, base_dir, planner::machine_from_json,
-                            [](const std::filesystem::path& f) { return planner::read_machine(f); });
-  c.plate = hal::described(block, "plate", sim::default_plate(), base_dir, planner::plate_from_json,
-                      [](const std::filesystem::path& f) { return planner::read_plate(f); });
+  // What jobs are planned for: the named description, else the one the driver's block gives (the
+  // simulator's, a Grbl machine's), else the built-in default.
+  description::MachineDescription fallback = description::default_machine();
   {
-    hal::ConfigBlock job = block.object("job");
+    description::JsonFields machine = block.object("machine");
+    const std::size_t problems = block.problem_count();
+    if (machine.present() && machine.value().is_object()) {
+      c.machine = machine.value();
+      // Only the driver's name is read here; the rest of the block is its driver's to read, below.
+      const std::string name = machine.text("driver", c.driver, driver_names());
+      if (block.problem_count() == problems) c.driver = canonical_driver_name(name);
+    }
+    c.machine["driver"] = c.driver;
+    // The driver reads its block now, so that `cmmd --check` names every bad key of it (under
+    // /machine), and says whether its configuration describes the machine.
+    if (block.problem_count() == problems) {
+      const std::unique_ptr<hal::Cmm> driver = make_driver(c.driver, base_dir.string());
+      try {
+        driver->configure(c.machine);
+        if (const auto described = driver->configured_machine()) fallback = *described;
+      } catch (const description::FieldError& e) {
+        block.problems_of(e, "machine");
+      }
+    }
+  }
+  c.description = description::described(block, "machine_description", fallback, base_dir,
+                                         description::machine_from_json, description::read_machine);
+  c.plate = description::described(block, "plate", description::default_plate(), base_dir,
+                                   description::plate_from_json, description::read_plate);
+  {
+    description::JsonFields job = block.object("job");
     c.job.delta_mm = job.number("delta_mm", c.job.delta_mm, 0.001, 10);
     c.job.spacing_mm = job.number("spacing_mm", c.job.spacing_mm, 0.05, 100);
     c.job.feature_angle_deg = job.number("feature_angle_deg", c.job.feature_angle_deg, 1, 179);
@@ -135,15 +139,8 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string&
 }
 
 DaemonConfig read_daemon_config(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in) throw hal::ConfigError(file.string(), {"cannot be opened"});
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {  // out_of_range too: a number like 1e400
-    throw hal::ConfigError(file.string(), {std::string("not JSON: ") + e.what()});
-  }
-  return daemon_config_from_json(j, file.string(), file.parent_path());
+  return daemon_config_from_json(description::read_json_file(file, "cmmd's config"), file.string(),
+                                 file.parent_path());
 }
 
 std::vector<std::string> changes_needing_restart(const DaemonConfig& running, const DaemonConfig& next) {
@@ -159,9 +156,9 @@ std::vector<std::string> changes_needing_restart(const DaemonConfig& running, co
   if (running.runtime_dir != next.runtime_dir) changed.push_back("runtime_dir");
   if (running.models_dir != next.models_dir) changed.push_back("models_dir");
   if (running.machine != next.machine) changed.push_back("machine");
-  if (planner::to_json(running.description) != planner::to_json(next.description))
+  if (description::to_json(running.description) != description::to_json(next.description))
     changed.push_back("machine_description");
-  if (planner::to_json(running.plate) != planner::to_json(next.plate)) changed.push_back("plate");
+  if (description::to_json(running.plate) != description::to_json(next.plate)) changed.push_back("plate");
   return changed;
 }
 

@@ -7,9 +7,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "daemon/driver_factory.hpp"
 #include "daemon/rpc_server.hpp"
-#include "planner/machine.hpp"
-#include "planner/plate.hpp"
+#include "hal/description/machine_description.hpp"
+#include "hal/description/plate.hpp"
 
 namespace cmm::daemon {
 
@@ -28,15 +29,15 @@ struct DaemonConfig {
   std::filesystem::path runtime_dir;  // the Unix socket; $RUNTIME_DIRECTORY overrides
   std::filesystem::path models_dir;   // read-only folder a job may name as "file:<name>"; empty: none
   std::string log_level = "info";     // spdlog level name
-  nlohmann::json machine = {{"driver", "sim"}};  // the driver's block, handed to hal::Cmm::configure
-  std::string driver = "sim";         // sim | modbus | grbl
-  planner::MachineDescription description;  // what jobs are planned for (tips' radii from the machine)
-  planner::Plate plate;               // the base plate jobs register by
+  nlohmann::json machine = nlohmann::json::object();  // the driver's block, handed to hal::Cmm::configure
+  std::string driver = default_driver_name();         // one of driver_factory.hpp's
+  description::MachineDescription description;  // what jobs are planned for (tips' radii from the machine)
+  description::Plate plate;               // the base plate jobs register by
   JobDefaults job;
 };
 
-// Reads `file`; relative paths in it resolve against its folder. Throws hal::ConfigError listing
-// every problem ("cmmd.json: /job/delta_mm: must be in [0.001, 10]").
+// Reads `file`; relative paths in it resolve against its folder. Throws description::FieldError
+// listing every problem ("cmmd.json: /job/delta_mm: must be in [0.001, 10], not 20").
 DaemonConfig read_daemon_config(const std::filesystem::path& file);
 DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string& source,
                                      const std::filesystem::path& base_dir);

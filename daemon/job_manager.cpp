@@ -4,6 +4,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "hal/description/eigen_json.hpp"
 #include "daemon/rpc_error.hpp"
 #include "daemon/storage_error.hpp"
 #include "hal/utc_time.hpp"
@@ -27,8 +28,8 @@ nlohmann::json normalized(nlohmann::json params, const JobRequest& r) {
   params["seed"] = r.seed;
   params["requalify"] = r.requalify;
   nlohmann::json& reg = params["registration"];
-  if (reg.contains("measure_plate")) reg["measure_plate"]["plate"] = planner::to_json(r.plate);
-  else reg["plate"] = planner::to_json(r.plate);
+  if (reg.contains("measure_plate")) reg["measure_plate"]["plate"] = description::to_json(r.plate);
+  else reg["plate"] = description::to_json(r.plate);
   return params;
 }
 
@@ -144,7 +145,7 @@ JobSink JobManager::sink_for(Job& job) {
   sink.touched = [this, &job](int touch, const hal::TouchResult& r) {
     notify_("job", "job.touch",
             {{"job", job.record.id}, {"touch", touch}, {"contact", r.contact},
-             {"centre", {r.centre.x(), r.centre.y(), r.centre.z()}}});
+             {"centre", description::vec3_json(r.centre)}});
   };
   return sink;
 }
@@ -287,7 +288,7 @@ nlohmann::json JobManager::result(int id, const std::string& format) const {
     if (!csv) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.csv");
     return {{"csv", *csv}, {"holes_csv", store_.read_file(id, "result.holes.csv").value_or("")}};
   }
-  if (format != "json") throw RpcError(rpc_code::invalid_params, "format must be json or csv", {{"path", "/format"}});
+  if (format != "json") throw_invalid_param("/format", "must be json or csv");
   const std::optional<std::string> text = store_.read_file(id, "result.json");
   if (!text) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.json");
   return nlohmann::json::parse(*text);

@@ -12,7 +12,7 @@
 namespace cmm::daemon {
 
 ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
-                                    const planner::AxisBox& travel_box, const geometry::CancelCheck& cancel) {
+                                    const description::TravelBox& travel_box, const geometry::CancelCheck& cancel) {
   ReferenceModel m;
   geometry::ReadResult read;
   try {
@@ -67,27 +67,29 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const Job
   return m;
 }
 
-planner::MachineDescription machine_for_job(const planner::MachineDescription& configured, const hal::MachineInfo& info) {
-  planner::MachineDescription machine = configured;
-  for (const hal::TipInfo& tip : info.tips)
-    for (planner::StylusTip& described : machine.tips)
+description::MachineDescription machine_for_job(const description::MachineDescription& configured,
+                                                const description::MachineDescription& reported) {
+  description::MachineDescription machine = configured;
+  for (const description::StylusTip& tip : reported.tips)
+    for (description::StylusTip& described : machine.tips)
       if (described.id == tip.id) {
         described.ball_radius_mm = tip.ball_radius_mm;
         described.offset = tip.offset;
+        described.qualification = tip.qualification;
       }
-  if (!info.active_tip.empty()) machine.active_tip = info.active_tip;
+  if (!reported.active_tip.empty()) machine.active_tip = reported.active_tip;
   // The plan keeps to where both the description and the machine itself say the ball may go: a
   // controller configured with tighter soft limits than machine.json must not fault mid-job.
-  const hal::TravelBox& reported = info.travel_box;
-  if ((reported.max.array() > reported.min.array()).all()) {
-    machine.travel_box.min = machine.travel_box.min.cwiseMax(reported.min);
-    machine.travel_box.max = machine.travel_box.max.cwiseMin(reported.max);
+  const description::TravelBox& box = reported.travel_box;
+  if ((box.max.array() > box.min.array()).all()) {
+    machine.travel_box.min = machine.travel_box.min.cwiseMax(box.min);
+    machine.travel_box.max = machine.travel_box.max.cwiseMin(box.max);
   }
   return machine;
 }
 
 planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
-                                  const planner::MachineDescription& machine, const JobRequest& request,
+                                  const description::MachineDescription& machine, const JobRequest& request,
                                   const geometry::CancelCheck& cancel) {
   planner::MeasurementPlanOptions options;
   options.touch.radius = machine.tip().ball_radius_mm;
@@ -100,19 +102,6 @@ planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isom
   } catch (const std::exception& e) {
     throw RpcError(rpc_code::planning_error, std::string("cannot plan the job: ") + e.what());
   }
-}
-
-nlohmann::json transform_json(const Eigen::Isometry3d& T) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back({T(r, 0), T(r, 1), T(r, 2), T(r, 3)});
-  return rows;
-}
-
-Eigen::Isometry3d transform_from_json(const nlohmann::json& j) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) T(r, c) = j.at(static_cast<std::size_t>(r)).at(static_cast<std::size_t>(c)).get<double>();
-  return T;
 }
 
 }  // namespace cmm::daemon

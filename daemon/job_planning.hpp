@@ -10,8 +10,8 @@
 #include "daemon/job_request.hpp"
 #include "geometry/cancellation.hpp"
 #include "geometry/feature_model.hpp"
-#include "hal/machine_info.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/measurement_plan.hpp"
 #include "planner/plan_json.hpp"
 
@@ -28,20 +28,18 @@ struct ReferenceModel {
 // planner::check_model_limits refuses for `travel_box` (before its features are looked for);
 // geometry::Cancelled when `cancel` asks.
 ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
-                                    const planner::AxisBox& travel_box, const geometry::CancelCheck& cancel = {});
+                                    const description::TravelBox& travel_box, const geometry::CancelCheck& cancel = {});
 
-// The description the plan is made for: the configured one, with the machine's active tip and its
-// qualified radius (a job uses the active tip's qualified radius, DESIGN.md), and the travel box
-// cut down to the machine's own where that is smaller.
-planner::MachineDescription machine_for_job(const planner::MachineDescription& configured, const hal::MachineInfo& info);
+// The description the plan is made for: the configured one (which knows the styli's shafts), with
+// the tips' radii, offsets and qualifications and the active tip as the machine reports them (a job
+// uses the active tip's qualified radius, DESIGN.md), and the travel box cut down to the machine's
+// own where that is smaller.
+description::MachineDescription machine_for_job(const description::MachineDescription& configured,
+                                                const description::MachineDescription& reported);
 
 // Throws RpcError planning_error when the plan cannot be made; geometry::Cancelled when `cancel` asks.
 planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
-                                  const planner::MachineDescription& machine, const JobRequest& request,
+                                  const description::MachineDescription& machine, const JobRequest& request,
                                   const geometry::CancelCheck& cancel = {});
-
-// T_M_S as the plan JSON writes it (4×4, row-major nested arrays) and back.
-nlohmann::json transform_json(const Eigen::Isometry3d& T);
-Eigen::Isometry3d transform_from_json(const nlohmann::json& j);
 
 }  // namespace cmm::daemon

@@ -5,21 +5,17 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hal/description/eigen_json.hpp"
+
 namespace cmm::daemon {
 
 namespace {
 
 constexpr double same_mm = 1e-7;
 
-nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
-hal::Vec3 vec_from(const nlohmann::json& j) {
-  return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()};
-}
-
 }  // namespace
 
-QualificationInForce in_force(const hal::TipInfo& tip, std::string source) {
+QualificationInForce in_force(const description::StylusTip& tip, std::string source) {
   QualificationInForce q;
   q.ball_radius_mm = tip.ball_radius_mm;
   q.offset = tip.offset;
@@ -28,7 +24,7 @@ QualificationInForce in_force(const hal::TipInfo& tip, std::string source) {
   return q;
 }
 
-bool same_qualification(const QualificationInForce& a, const hal::TipInfo& now) {
+bool same_qualification(const QualificationInForce& a, const description::StylusTip& now) {
   if (std::abs(a.ball_radius_mm - now.ball_radius_mm) > same_mm) return false;
   if (((a.offset - now.offset).array().abs() > same_mm).any()) return false;
   if (a.qualification.has_value() != now.qualification.has_value()) return false;
@@ -50,12 +46,12 @@ nlohmann::json to_json(const JobQualifications& q) {
     if (e.qualification)
       qualification = {{"time_utc", e.qualification->time_utc},
                        {"ball_radius_mm", e.qualification->ball_radius_mm},
-                       {"offset", vec(e.qualification->offset)},
+                       {"offset", description::vec3_json(e.qualification->offset)},
                        {"residual_rms_mm", e.qualification->residual_rms_mm},
                        {"touches", e.qualification->touches}};
     list.push_back({{"index", i},
                     {"ball_radius_mm", e.ball_radius_mm},
-                    {"offset", vec(e.offset)},
+                    {"offset", description::vec3_json(e.offset)},
                     {"qualification", qualification},
                     {"source", e.source},
                     {"since_utc", e.since_utc}});
@@ -69,12 +65,12 @@ JobQualifications job_qualifications_from_json(const nlohmann::json& j) {
   for (const nlohmann::json& e : j.at("qualifications")) {
     QualificationInForce entry;
     entry.ball_radius_mm = e.at("ball_radius_mm").get<double>();
-    entry.offset = vec_from(e.at("offset"));
+    entry.offset = description::vec3_from_json(e.at("offset"));
     if (const nlohmann::json& k = e.at("qualification"); !k.is_null()) {
-      hal::TipQualification t;
+      description::TipQualification t;
       t.time_utc = k.at("time_utc").get<std::string>();
       t.ball_radius_mm = k.at("ball_radius_mm").get<double>();
-      t.offset = vec_from(k.at("offset"));
+      t.offset = description::vec3_from_json(k.at("offset"));
       t.residual_rms_mm = k.at("residual_rms_mm").get<double>();
       t.touches = k.at("touches").get<int>();
       entry.qualification = t;

@@ -10,14 +10,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "hal/machine_info.hpp"
+#include "hal/description/machine_description.hpp"
 
 namespace cmm::daemon {
 
 struct QualificationInForce {
   double ball_radius_mm = 0;   // the tip's radius as the machine reported it
-  hal::Vec3 offset = hal::Vec3::Zero();
-  std::optional<hal::TipQualification> qualification;  // empty: the tip's nominal values, never qualified
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  std::optional<description::TipQualification> qualification;  // empty: the tip's nominal values, never qualified
   std::string source;     // why the job took it on: "in force when the job began", …
   std::string since_utc;  // when the job took it on
 };
@@ -28,12 +28,12 @@ struct JobQualifications {
 };
 
 // What the machine reports for `tip` now, as an entry with `source`.
-QualificationInForce in_force(const hal::TipInfo& tip, std::string source);
+QualificationInForce in_force(const description::StylusTip& tip, std::string source);
 
 // Whether the machine's tip is still the one in force: same radius, offset and qualification time
 // stamp (to 1e-7 mm: the values come through the same wire both times), and qualified on both sides
 // or on neither.
-bool same_qualification(const QualificationInForce& in_force, const hal::TipInfo& now);
+bool same_qualification(const QualificationInForce& in_force, const description::StylusTip& now);
 
 // One line for reasons and notes: "r 0.998512 mm, qualified 2026-11-24T12:00:00Z" or "r 1 mm
 // nominal (never qualified)".

@@ -32,7 +32,7 @@ struct JobRequest {
   // When the tip's qualification changed or vanished under the job (a controller restart): true,
   // the job qualifies the tip itself and goes on; false (the default), it pauses for the operator.
   bool requalify = false;
-  planner::Plate plate;
+  description::Plate plate;
   // Exactly one of these: corner pairs given, or the plate measured on the machine.
   std::optional<planner::RegistrationInput> given;
   std::optional<PlateMeasurement> measure;

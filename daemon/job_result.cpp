@@ -59,7 +59,7 @@ nlohmann::json traceability(const JobResultInputs& in, double radius_mm) {
   return {{"cmmd_version", in.version},
           {"config_file", in.config.source.string()},
           {"config_sha256", config_hash},
-          {"machine_description_sha256", sha256_of(planner::to_json(in.machine).dump())},
+          {"machine_description_sha256", sha256_of(description::to_json(in.machine).dump())},
           {"driver", in.config.driver},
           {"model", in.request.model},
           {"model_file", in.model.inputs.model_file.string()},

@@ -13,7 +13,7 @@
 #include "daemon/job_planning.hpp"
 #include "daemon/job_qualifications.hpp"
 #include "daemon/job_store.hpp"
-#include "hal/machine_info.hpp"
+#include "hal/description/machine_description.hpp"
 #include "hal/motion.hpp"
 #include "planner/plan_compensation.hpp"
 #include "planner/touch.hpp"
@@ -23,7 +23,7 @@ namespace cmm::daemon {
 struct JobResultInputs {
   const ReferenceModel& model;
   const planner::MeasurementPlan& plan;
-  const planner::MachineDescription& machine;
+  const description::MachineDescription& machine;
   const JobRequest& request;
   const DaemonConfig& config;
   Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
@@ -33,7 +33,7 @@ struct JobResultInputs {
   // were), and which one each touch was made under (by plan touch id; missing: the first).
   const JobQualifications* qualifications = nullptr;
   std::map<int, int> touch_qualification;
-  hal::TipInfo tip;            // the active tip, with its qualification
+  description::StylusTip tip;            // the active tip, with its qualification
   double machine_time_s = 0;   // machine clock from registering to the last touch, this run
   std::string version;         // cmmd's
   std::string started_utc, finished_utc;

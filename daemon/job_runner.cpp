@@ -6,7 +6,8 @@
 #include <map>
 #include <set>
 
-#include "daemon/atomic_file.hpp"
+#include "geometry/atomic_file.hpp"
+#include "hal/description/eigen_json.hpp"
 #include "daemon/job_planning.hpp"
 #include "daemon/job_result.hpp"
 #include "daemon/rpc_error.hpp"
@@ -16,6 +17,7 @@
 #include "hal/fault.hpp"
 #include "hal/utc_time.hpp"
 #include "planner/corner_probing.hpp"
+#include "planner/plate_pose.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -34,17 +36,8 @@ struct Held {
 // was planned for (ten times a qualification's repeatability): the plan is made afresh instead.
 constexpr double max_radius_change_mm = 0.01;
 
-const hal::TipInfo* find_tip(const hal::MachineInfo& info, const std::string& id) {
-  for (const hal::TipInfo& tip : info.tips)
-    if (tip.id == id) return &tip;
-  return nullptr;
-}
-
-nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
-
-hal::TipInfo active_tip(const hal::MachineInfo& info) {
-  for (const hal::TipInfo& tip : info.tips)
-    if (tip.id == info.active_tip) return tip;
+description::StylusTip active_tip(const description::MachineDescription& info) {
+  if (const description::StylusTip* tip = info.find_tip(info.active_tip)) return *tip;
   throw RpcError(rpc_code::planning_error, "the machine reports no active tip (\"" + info.active_tip + "\")");
 }
 
@@ -106,13 +99,13 @@ void JobRunner::prepare_machine(bool rehome) {
 }
 
 JobRunner::Registration JobRunner::measure_plate(double radius_mm) {
-  const planner::Plate& plate = request_.plate;
+  const description::Plate& plate = request_.plate;
   const PlateMeasurement& m = *request_.measure;
   const Eigen::Isometry3d rough = planner::fit_plate_pose(plate, m.ids, m.rough_machine);
   planner::CornerProbingOptions options;
   options.ball_radius_mm = radius_mm;
   const std::vector<planner::Touch> touches = planner::plan_corner_touches(plate, rough, options);
-  const planner::MachineDescription& d = env_.config.description;
+  const description::MachineDescription& d = env_.config.description;
   std::vector<planner::Vec3> centres;
   for (std::size_t i = 0; i < touches.size(); ++i) {
     check_control();
@@ -149,7 +142,7 @@ JobRunner::Registration JobRunner::measure_plate(double radius_mm) {
   reg.file = {{"method", "measured"}, {"registration", planner::to_json(fit)}, {"corner_touches", touches.size()}};
   nlohmann::json corners = nlohmann::json::array();
   for (const planner::CornerFit& c : fits)
-    corners.push_back({{"id", c.corner}, {"machine", vec(c.position)}, {"face_rms_mm", c.face_rms_mm},
+    corners.push_back({{"id", c.corner}, {"machine", description::vec3_json(c.position)}, {"face_rms_mm", c.face_rms_mm},
                        {"conditioning", c.conditioning}});
   reg.file["measured_corners"] = corners;
   return reg;
@@ -160,7 +153,7 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
     if (const std::optional<std::string> kept = env_.store.read_file(id_, "registration.json")) {
       Registration reg;
       reg.file = nlohmann::json::parse(*kept);
-      reg.T_M_S = transform_from_json(reg.file.at("T_M_S"));
+      reg.T_M_S = description::transform_from_json(reg.file.at("T_M_S"));
       return reg;
     }
   sink_.state(JobState::registering, "", std::nullopt);
@@ -173,7 +166,7 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
       std::filesystem::rename(folder / "touches.jsonl", folder / ("touches.before-" + stamp + ".jsonl"));
     std::error_code ignored;
     std::filesystem::remove(folder / "plan.json", ignored);
-    sync_folder(folder);
+    geometry::sync_folder(folder);
   }
   Registration reg;
   try {
@@ -190,7 +183,7 @@ JobRunner::Registration JobRunner::registration(bool reregister, double radius_m
   }
   // The plan is made again on every resume; keeping the radius and tip it was first made for keeps
   // its touch ids, and with them the journal, valid even if the tip is qualified again meanwhile.
-  reg.file["T_M_S"] = transform_json(reg.T_M_S);
+  reg.file["T_M_S"] = description::transform_json(reg.T_M_S);
   reg.file["radius_mm"] = radius_mm;
   reg.file["tip"] = tip;
   reg.file["time_utc"] = hal::utc_now();
@@ -206,7 +199,7 @@ std::optional<std::string> JobRunner::finish_touch_safely(bool clear_of_part) {
     env_.machine.bring_up();
     const hal::MachineStatus s = env_.machine.cmm().status();
     if (!s.homed || s.aborted || s.estop) return std::nullopt;  // it cannot move now; the next mover leaves the line
-    const planner::MachineDescription& d = env_.config.description;
+    const description::MachineDescription& d = env_.config.description;
     if (!line) {
       // Between touches the ball rests at the last one's search start, below the plane.
       rise_to_clearance(env_.machine.cmm(), d.clearance_z, {0, d.probe_speed_mm_s});
@@ -267,7 +260,7 @@ void JobRunner::load_qualifications() {
 // cmmd itself measured since (machine.qualify during the hold), or with `requalify` measures one
 // itself; else it pauses for the operator. `reregister` starts the record afresh, as the journal is.
 // Returns the machine's info as it is afterwards.
-hal::MachineInfo JobRunner::check_qualification(hal::MachineInfo info, bool reregister) {
+description::MachineDescription JobRunner::check_qualification(description::MachineDescription info, bool reregister) {
   checked_connections_ = env_.machine.connections();
   const std::filesystem::path folder = env_.store.folder(id_);
   if (reregister && std::filesystem::exists(folder / "qualifications.json")) {
@@ -279,7 +272,7 @@ hal::MachineInfo JobRunner::check_qualification(hal::MachineInfo info, bool rere
   const std::string tip_id = qualifications_ ? qualifications_->tip
                              : kept           ? nlohmann::json::parse(*kept).value("tip", info.active_tip)
                                               : info.active_tip;
-  const hal::TipInfo* now = find_tip(info, tip_id);
+  const description::StylusTip* now = info.find_tip(tip_id);
   if (now == nullptr || tip_id != info.active_tip) return info;  // the tip check before probing holds the job
   if (!qualifications_) {
     const char* source = reregister ? "in force when the job was registered again (reregister)"
@@ -294,7 +287,7 @@ hal::MachineInfo JobRunner::check_qualification(hal::MachineInfo info, bool rere
   }
   const QualificationInForce& current = qualifications_->list.back();
   if (same_qualification(current, *now)) return info;
-  if (const std::optional<hal::TipInfo> measured = env_.machine.qualified_by_cmmd(tip_id);
+  if (const std::optional<description::StylusTip> measured = env_.machine.qualified_by_cmmd(tip_id);
       measured && now->qualification && same_qualification(in_force(*measured, ""), *now)) {
     take_on(*now, "machine.qualify while the job was held");
     return info;
@@ -305,7 +298,7 @@ hal::MachineInfo JobRunner::check_qualification(hal::MachineInfo info, bool rere
     spdlog::warn("job {}: tip {}: {}; qualifying it again (requalify)", id_, tip_id, details);
     requalify(tip_id);
     info = env_.machine.cmm().info();
-    if (const hal::TipInfo* qualified = find_tip(info, tip_id)) take_on(*qualified, "qualified by the job (requalify)");
+    if (const description::StylusTip* qualified = info.find_tip(tip_id)) take_on(*qualified, "qualified by the job (requalify)");
     return info;
   }
   const char* what = current.qualification && !now->qualification ? "vanished" : "changed";
@@ -316,7 +309,7 @@ hal::MachineInfo JobRunner::check_qualification(hal::MachineInfo info, bool rere
 
 // The touches from here on are made, and compensated, with the tip as it is now.
 // Before the registration nothing is measured yet, and the new one simply replaces the old.
-void JobRunner::take_on(const hal::TipInfo& tip, const std::string& source) {
+void JobRunner::take_on(const description::StylusTip& tip, const std::string& source) {
   JobQualifications next = *qualifications_;
   const QualificationInForce planned = next.list.front();
   if (!env_.store.read_file(id_, "registration.json")) {
@@ -341,7 +334,7 @@ void JobRunner::take_on(const hal::TipInfo& tip, const std::string& source) {
 // qualification's own moves start from there.
 void JobRunner::requalify(const std::string& tip_id) {
   hal::Cmm& cmm = env_.machine.cmm();
-  const planner::MachineDescription& d = env_.config.description;
+  const description::MachineDescription& d = env_.config.description;
   double clearance_z = d.clearance_z;
   if (const std::optional<std::string> plan = env_.store.read_file(id_, "plan.json"))
     clearance_z = std::max(clearance_z, nlohmann::json::parse(*plan).value("clearance_z", clearance_z));
@@ -352,7 +345,7 @@ void JobRunner::requalify(const std::string& tip_id) {
   cmm.move({hal::Vec3(sphere.x(), sphere.y(), at.z()), 0});
   hal::QualificationOptions options;
   options.before_motion = [this] { check_stop(); };
-  const hal::TipQualification q = env_.machine.qualify(tip_id, options);
+  const description::TipQualification q = env_.machine.qualify(tip_id, options);
   spdlog::info("job {}: tip {} qualified: r {:.5f} mm, rms {:.5f} mm", id_, tip_id, q.ball_radius_mm, q.residual_rms_mm);
 }
 
@@ -372,13 +365,13 @@ void JobRunner::run(bool rehome, bool reregister) {
     if (probed) env_.machine.bring_up();
     else prepare_machine(rehome);
     const double clock0_s = env_.machine.cmm().status().t_s;
-    hal::MachineInfo info = env_.machine.cmm().info();
+    description::MachineDescription info = env_.machine.cmm().info();
     if (probed) load_qualifications();
     else info = check_qualification(std::move(info), reregister);
-    const hal::TipInfo tip = active_tip(info);
+    const description::StylusTip tip = active_tip(info);
     const Registration reg = registration(reregister, tip.ball_radius_mm, tip.id);
-    planner::MachineDescription machine = machine_for_job(env_.config.description, info);
-    for (planner::StylusTip& t : machine.tips)
+    description::MachineDescription machine = machine_for_job(env_.config.description, info);
+    for (description::StylusTip& t : machine.tips)
       if (t.id == reg.file.value("tip", tip.id)) {
         t.ball_radius_mm = reg.file.value("radius_mm", t.ball_radius_mm);
         machine.active_tip = t.id;

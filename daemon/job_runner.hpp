@@ -62,8 +62,8 @@ class JobRunner {
   bool probing_complete() const;
   void journal_unjournaled();
   void load_qualifications();
-  hal::MachineInfo check_qualification(hal::MachineInfo info, bool reregister);
-  void take_on(const hal::TipInfo& tip, const std::string& source);
+  description::MachineDescription check_qualification(description::MachineDescription info, bool reregister);
+  void take_on(const description::StylusTip& tip, const std::string& source);
   void requalify(const std::string& tip_id);
   Registration registration(bool reregister, double radius_mm, const std::string& tip);
   Registration measure_plate(double radius_mm);

@@ -2,9 +2,6 @@
 // turns the jobs a restart cut short into interrupted ones.
 #include "daemon/job_store.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
@@ -14,7 +11,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "daemon/atomic_file.hpp"
+#include "geometry/atomic_file.hpp"
 #include "geometry/file_error.hpp"
 #include "hal/utc_time.hpp"
 
@@ -30,43 +27,12 @@ constexpr const char* request_file = "request.json";
 constexpr const char* spare_file = ".job.json.spare";
 constexpr std::size_t spare_bytes = 16 * 1024;
 
-// Allocates the spare if it is missing; false when there is no room for it (then job.json is
-// written the ordinary way until there is).
-bool keep_spare(const fs::path& dir) {
-  const fs::path spare = dir / spare_file;
-  const int fd = ::open(spare.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) return false;
-  const int rc = ::posix_fallocate(fd, 0, static_cast<off_t>(spare_bytes));
-  ::close(fd);
-  if (rc != 0) ::unlink(spare.c_str());  // half a spare is no reserve: give its space back
-  return rc == 0;
-}
-
-// job.json replaced atomically. With a spare at hand the new record is written into the spare's
-// blocks (no new space needed), which is then renamed over job.json; the old job.json's blocks are
-// what the next spare takes. Without one, write_atomically. Throws geometry::FileError.
+// job.json replaced atomically: through the spare when there is one (no new space needed; the old
+// job.json's blocks are what the next spare takes), else the ordinary way. Throws geometry::FileError.
 void write_record(const fs::path& dir, const std::string& content) {
-  const fs::path spare = dir / spare_file, file = dir / record_file;
-  if (content.size() <= spare_bytes && fs::exists(spare)) {
-    const int fd = ::open(spare.c_str(), O_WRONLY | O_CLOEXEC);
-    bool written = fd >= 0;
-    for (std::size_t done = 0; written && done < content.size();) {
-      const ssize_t n = ::pwrite(fd, content.data() + done, content.size() - done, static_cast<off_t>(done));
-      if (n < 0 && errno == EINTR) continue;
-      written = n > 0;
-      if (written) done += static_cast<std::size_t>(n);
-    }
-    written = written && ::ftruncate(fd, static_cast<off_t>(content.size())) == 0 && ::fsync(fd) == 0;
-    if (fd >= 0) written = ::close(fd) == 0 && written;
-    if (written && ::rename(spare.c_str(), file.c_str()) == 0) {
-      sync_folder(dir);
-      keep_spare(dir);
-      return;
-    }
-    ::unlink(spare.c_str());  // whatever it holds now is no record: the ordinary way below
-  }
-  write_atomically(file, content);
-  keep_spare(dir);
+  if (!geometry::write_through_spare(dir / record_file, dir / spare_file, content, spare_bytes))
+    geometry::write_atomically(dir / record_file, content);
+  geometry::allocate_spare(dir / spare_file, spare_bytes);
 }
 
 // The id a job folder's name spells ("000042" → 42), or nullopt for anything else in jobs_dir.
@@ -225,8 +191,8 @@ JobRecord JobStore::create(const nlohmann::json& request, std::string name, std:
   record.progress.phase = to_string(JobState::queued);
   record.request = request;
   try {
-    sync_folder(jobs_dir_);
-    write_atomically(dir / request_file, request.dump(2));
+    geometry::sync_folder(jobs_dir_);
+    geometry::write_atomically(dir / request_file, request.dump(2));
     write_record(dir, nlohmann::json(record).dump(2));
   } catch (...) {
     // No job half made (a full disk): the folder goes, and its id with it is free again.
@@ -250,7 +216,7 @@ void JobStore::write_file(int id, const std::string& name, std::string_view cont
   std::lock_guard lock(mutex_);
   const fs::path dir = folder(id);
   if (!fs::is_directory(dir)) throw geometry::FileError::whole(dir, "no such job folder (job " + std::to_string(id) + ")");
-  write_atomically(dir / name, content);
+  geometry::write_atomically(dir / name, content);
 }
 
 std::optional<std::string> JobStore::read_file(int id, const std::string& name) const {

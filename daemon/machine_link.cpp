@@ -4,14 +4,13 @@
 
 #include <spdlog/spdlog.h>
 
-#include "daemon/atomic_file.hpp"
+#include "hal/description/eigen_json.hpp"
+#include "geometry/atomic_file.hpp"
 #include "hal/fault.hpp"
 
 namespace cmm::daemon {
 
 namespace {
-
-nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 }  // namespace
 
@@ -22,10 +21,8 @@ MachineLink::MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, st
   try {
     const nlohmann::json j = nlohmann::json::parse(std::ifstream(touch_file_));
     SearchLine line;
-    for (int i = 0; i < 3; ++i) {
-      line.start[i] = j.at("start").at(static_cast<std::size_t>(i)).get<double>();
-      line.direction[i] = j.at("direction").at(static_cast<std::size_t>(i)).get<double>();
-    }
+    line.start = description::vec3_from_json(j.at("start"));
+    line.direction = description::vec3_from_json(j.at("direction"));
     touch_ = line;
     spdlog::warn("the probe may still be on the search line from ({}, {}, {}): the next motion leaves along it",
                  line.start.x(), line.start.y(), line.start.z());
@@ -37,7 +34,7 @@ MachineLink::MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, st
 void MachineLink::enter_touch(const SearchLine& line) {
   const std::lock_guard lock(touch_mutex_);
   if (!touch_file_.empty())
-    write_atomically(touch_file_, nlohmann::json{{"start", vec(line.start)}, {"direction", vec(line.direction)}}.dump());
+    geometry::write_atomically(touch_file_, nlohmann::json{{"start", description::vec3_json(line.start)}, {"direction", description::vec3_json(line.direction)}}.dump());
   touch_ = line;
 }
 
@@ -80,9 +77,9 @@ void MachineLink::bring_up() {
   cmm_->enable();
 }
 
-hal::TipQualification MachineLink::qualify(const std::string& tip_id, const hal::QualificationOptions& options) {
-  const hal::TipQualification q = hal::qualify(*cmm_, tip_id, options);
-  for (const hal::TipInfo& tip : cmm_->info().tips)
+description::TipQualification MachineLink::qualify(const std::string& tip_id, const hal::QualificationOptions& options) {
+  const description::TipQualification q = hal::qualify(*cmm_, tip_id, options);
+  for (const description::StylusTip& tip : cmm_->info().tips)
     if (tip.id == tip_id) {
       const std::lock_guard lock(qualified_mutex_);
       qualified_[tip_id] = tip;
@@ -90,7 +87,7 @@ hal::TipQualification MachineLink::qualify(const std::string& tip_id, const hal:
   return q;
 }
 
-std::optional<hal::TipInfo> MachineLink::qualified_by_cmmd(const std::string& tip_id) const {
+std::optional<description::StylusTip> MachineLink::qualified_by_cmmd(const std::string& tip_id) const {
   const std::lock_guard lock(qualified_mutex_);
   const auto it = qualified_.find(tip_id);
   if (it == qualified_.end()) return std::nullopt;
@@ -108,7 +105,7 @@ nlohmann::json MachineLink::status_json() {
               {"moving", s.moving},
               {"estop", s.estop},
               {"aborted", s.aborted},
-              {"position", vec(s.position)},
+              {"position", description::vec3_json(s.position)},
               {"tip", s.tip_id},
               {"t_s", s.t_s},
               {"fault", s.fault ? nlohmann::json{{"kind", hal::to_string(*s.fault)}, {"message", s.fault_message}}

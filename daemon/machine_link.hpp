@@ -35,7 +35,7 @@ class MachineLink {
               std::filesystem::path touch_file = {});
 
   // Configures once, then connects and enables as far as needed. Throws hal::Fault (CommLost when
-  // the machine cannot be reached) or hal::ConfigError for a bad driver block.
+  // the machine cannot be reached) or description::FieldError for a bad driver block.
   void bring_up();
   // How many times bring_up() found the link down and brought it up: a job compares it to see that
   // the driver reconnected (a controller that restarted may have lost its tip qualifications).
@@ -44,9 +44,9 @@ class MachineLink {
   // hal::qualify on the machine (the lease holder's motion), and the result remembered as the
   // machine then reports it: a job held because its tip's qualification changed takes on exactly a
   // qualification cmmd itself measured (machine.qualify, or the job's own requalification).
-  hal::TipQualification qualify(const std::string& tip_id, const hal::QualificationOptions& options);
+  description::TipQualification qualify(const std::string& tip_id, const hal::QualificationOptions& options);
   // The tip as the machine reported it right after cmmd last qualified it (since cmmd started).
-  std::optional<hal::TipInfo> qualified_by_cmmd(const std::string& tip_id) const;
+  std::optional<description::StylusTip> qualified_by_cmmd(const std::string& tip_id) const;
   // status() that never throws: a link that is down reads as {"link": "down", "fault": …}.
   nlohmann::json status_json();
   hal::Cmm& cmm() { return *cmm_; }  // motion for the lease holder; status, stop, abort for anyone
@@ -102,7 +102,7 @@ class MachineLink {
   std::atomic<std::uint64_t> stops_{0};
   std::atomic<std::uint64_t> connections_{0};
   mutable std::mutex qualified_mutex_;
-  std::map<std::string, hal::TipInfo> qualified_;
+  std::map<std::string, description::StylusTip> qualified_;
 };
 
 nlohmann::json fault_json(const std::exception& e);  // {"kind", "message"}; kind "Internal" for a non-fault

@@ -2,16 +2,13 @@
 // resolution of model references, with the path checks that keep "file:" inside models_dir.
 #include "daemon/model_store.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <cerrno>
 #include <vector>
 
-#include "daemon/atomic_file.hpp"
+#include "geometry/atomic_file.hpp"
 #include "daemon/base64.hpp"
 #include "daemon/rpc_error.hpp"
 #include "daemon/sha256.hpp"
@@ -25,10 +22,6 @@ namespace fs = std::filesystem;
 namespace {
 constexpr std::array<const char*, 4> mesh_extensions = {".stl", ".ply", ".obj", ".off"};
 
-RpcError bad_param(const std::string& path, const std::string& message) {
-  return RpcError(rpc_code::invalid_params, message, {{"path", path}});
-}
-
 RpcError upload_failed(const std::string& message, std::uint64_t expected_offset) {
   return RpcError(rpc_code::upload_error, message, {{"expected_offset", expected_offset}});
 }
@@ -41,7 +34,7 @@ std::string lowercase(std::string text) {
 std::string mesh_extension(const std::string& name) {
   const std::string ext = lowercase(fs::path(name).extension().string());
   if (std::find(mesh_extensions.begin(), mesh_extensions.end(), ext) == mesh_extensions.end())
-    throw bad_param("/name", "\"" + name + "\" is not a mesh file (expected .stl, .ply, .obj or .off)");
+    throw_invalid_param("/name", "\"" + name + "\" is not a mesh file (expected .stl, .ply, .obj or .off)");
   return ext;
 }
 
@@ -51,31 +44,6 @@ std::uint64_t size_or_zero(const fs::path& file) {
   return error ? 0 : size;
 }
 
-[[noreturn]] void fail(const fs::path& file, const std::string& step, int error) {
-  throw geometry::FileError::system(file, step, error);
-}
-
-// Writes `bytes` at `offset` (cutting whatever lay beyond it) and makes it durable. When that fails
-// (a full disk) the file is cut back to `offset`: it holds exactly the chunks before this one, so
-// the upload goes on from there once there is room, and no half chunk is ever counted as received.
-void write_part(const fs::path& file, std::uint64_t offset, std::string_view bytes) {
-  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) fail(file, "cannot open the partial upload", errno);
-  auto abandon = [&](const std::string& step, int error) {
-    if (::ftruncate(fd, static_cast<off_t>(offset)) == 0) (void)::fsync(fd);
-    ::close(fd);
-    fail(file, step, error);
-  };
-  if (::ftruncate(fd, static_cast<off_t>(offset)) != 0) abandon("truncate", errno);
-  for (std::size_t done = 0; done < bytes.size();) {
-    const ssize_t n = ::pwrite(fd, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) abandon("write", n < 0 ? errno : EIO);
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0) abandon("fsync", errno);
-  ::close(fd);
-}
 }  // namespace
 
 ModelStore::ModelStore(fs::path state_models_dir, fs::path models_dir, std::uint64_t max_model_bytes)
@@ -100,7 +68,7 @@ std::vector<std::string> ModelStore::stored_extensions(const std::string& sha256
 
 UploadStatus ModelStore::upload(const UploadChunk& chunk) {
   const std::string sha = lowercase(chunk.sha256_hex);
-  if (!is_sha256_hex(sha)) throw bad_param("/sha256", "sha256 must be 64 hex digits, got \"" + chunk.sha256_hex + "\"");
+  if (!is_sha256_hex(sha)) throw_invalid_param("/sha256", "sha256 must be 64 hex digits, got \"" + chunk.sha256_hex + "\"");
   const std::string ext = mesh_extension(chunk.name);
   const std::string model = "sha256:" + sha + ext;
   if (chunk.size > max_model_bytes_)
@@ -111,7 +79,7 @@ UploadStatus ModelStore::upload(const UploadChunk& chunk) {
   try {
     bytes = decode_base64(chunk.data_base64);
   } catch (const std::invalid_argument& e) {
-    throw bad_param("/data", e.what());
+    throw_invalid_param("/data", e.what());
   }
 
   std::lock_guard lock(mutex_);
@@ -120,7 +88,7 @@ UploadStatus ModelStore::upload(const UploadChunk& chunk) {
   // the bytes are kept under this one too (a hard link, no bytes sent again).
   if (const std::vector<std::string> others = stored_extensions(sha); !others.empty()) {
     fs::create_hard_link(stored_file(sha, others.front()), dir_ / (sha + ext));
-    sync_folder(dir_);
+    geometry::sync_folder(dir_);
     return {model, chunk.size, true};
   }
   const fs::path part = partial_dir_ / (sha + ".part");
@@ -137,8 +105,8 @@ UploadStatus ModelStore::upload(const UploadChunk& chunk) {
                         0);
   }
   try {
-    if (chunk.offset == 0 || !bytes.empty()) write_part(part, chunk.offset, bytes);
-    if (chunk.offset == 0) sync_folder(partial_dir_);  // the part file itself survives a power cut
+    if (chunk.offset == 0 || !bytes.empty()) geometry::write_chunk(part, chunk.offset, bytes);
+    if (chunk.offset == 0) geometry::sync_folder(partial_dir_);  // the part file itself survives a power cut
     const std::uint64_t now_received = chunk.offset + bytes.size();
     if (now_received < chunk.size) return {model, now_received, false};
     return finish(sha, ext, chunk.size);
@@ -163,8 +131,8 @@ UploadStatus ModelStore::finish(const std::string& sha, const std::string& ext, 
   }
   const fs::path file = dir_ / (sha + ext);
   fs::rename(part, file);
-  sync_folder(dir_);
-  sync_folder(partial_dir_);
+  geometry::sync_folder(dir_);
+  geometry::sync_folder(partial_dir_);
   return {"sha256:" + sha + ext, size, true};
 }
 
@@ -175,10 +143,10 @@ fs::path ModelStore::resolve(const std::string& ref) const {
     const std::string name = lowercase(ref.substr(7));
     const std::string sha = name.substr(0, std::min<std::size_t>(64, name.size()));
     const std::string ext = name.substr(sha.size());
-    if (!is_sha256_hex(sha)) throw bad_param("/model", "\"" + ref + "\": sha256 must be 64 hex digits");
+    if (!is_sha256_hex(sha)) throw_invalid_param("/model", "\"" + ref + "\": sha256 must be 64 hex digits");
     if (!ext.empty()) {
       if (std::find(mesh_extensions.begin(), mesh_extensions.end(), ext) == mesh_extensions.end())
-        throw bad_param("/model", "\"" + ref + "\": after the digest only .stl, .ply, .obj or .off may follow");
+        throw_invalid_param("/model", "\"" + ref + "\": after the digest only .stl, .ply, .obj or .off may follow");
       const fs::path file = stored_file(sha, ext);
       if (file.empty()) throw RpcError(rpc_code::not_found, "no uploaded model " + ref, {{"model", ref}});
       return file;
@@ -188,29 +156,29 @@ fs::path ModelStore::resolve(const std::string& ref) const {
     if (stored.size() > 1) {
       std::string names;
       for (const std::string& e : stored) names += (names.empty() ? "" : ", ") + ("sha256:" + sha + e);
-      throw bad_param("/model", "\"" + ref + "\" was uploaded as " + std::to_string(stored.size()) +
+      throw_invalid_param("/model", "\"" + ref + "\" was uploaded as " + std::to_string(stored.size()) +
                                     " formats: name one (" + names + ")");
     }
     return stored_file(sha, stored.front());
   }
   if (ref.rfind("file:", 0) == 0) return resolve_file(ref.substr(5));
-  throw bad_param("/model", "\"" + ref + "\" is not a model reference (\"sha256:<hex>\" or \"file:<name>\")");
+  throw_invalid_param("/model", "\"" + ref + "\" is not a model reference (\"sha256:<hex>\" or \"file:<name>\")");
 }
 
 fs::path ModelStore::resolve_file(const std::string& name) const {
   const std::string ref = "file:" + name;
-  if (models_dir_.empty()) throw bad_param("/model", ref + ": no models_dir is configured");
+  if (models_dir_.empty()) throw_invalid_param("/model", ref + ": no models_dir is configured");
   const fs::path relative(name);
-  if (name.empty() || relative.is_absolute()) throw bad_param("/model", ref + ": need a relative name inside models_dir");
+  if (name.empty() || relative.is_absolute()) throw_invalid_param("/model", ref + ": need a relative name inside models_dir");
   for (const auto& part : relative)
-    if (part == "..") throw bad_param("/model", ref + ": \"..\" is not allowed");
+    if (part == "..") throw_invalid_param("/model", ref + ": \"..\" is not allowed");
   std::error_code error;
   const fs::path root = fs::weakly_canonical(models_dir_, error);
   if (error) throw RpcError(rpc_code::not_found, ref + ": models_dir " + models_dir_.string() + " is unreadable", {{"model", ref}});
   // Symlinks inside models_dir may point anywhere; what counts is where they lead.
   const fs::path target = fs::weakly_canonical(root / relative, error);
   const auto [root_end, target_it] = std::mismatch(root.begin(), root.end(), target.begin(), target.end());
-  if (error || root_end != root.end()) throw bad_param("/model", ref + ": leads out of models_dir");
+  if (error || root_end != root.end()) throw_invalid_param("/model", ref + ": leads out of models_dir");
   if (!fs::is_regular_file(target)) throw RpcError(rpc_code::not_found, ref + ": no such file in " + root.string(), {{"model", ref}});
   return target;
 }

@@ -39,20 +39,19 @@ Eigen::Isometry3d preview_registration(const JobRequest& request, std::vector<st
 
 // The simulator's block: the reference mesh standing where T_M_S puts it, on a plate under it.
 nlohmann::json sim_block(const std::filesystem::path& model_file, const JobRequest& request,
-                         const planner::MachineDescription& machine, const geometry::TriangleMesh& mesh,
+                         const description::MachineDescription& machine, const geometry::TriangleMesh& mesh,
                          const Eigen::Isometry3d& T_M_S) {
   const Eigen::Vector3d lo = mesh.vertices.colwise().minCoeff().transpose();
   const Eigen::Vector3d hi = mesh.vertices.colwise().maxCoeff().transpose();
-  const planner::Plate& plate = request.plate;
+  const description::Plate& plate = request.plate;
   Eigen::Vector3d plate_mid = Eigen::Vector3d::Zero();
   for (const planner::Vec3& c : plate.corners) plate_mid += c;
   plate_mid /= static_cast<double>(plate.corners.size());
   Eigen::Isometry3d T_S_P = Eigen::Isometry3d::Identity();
   T_S_P.translation() = Eigen::Vector3d(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), lo.z()) -
                         Eigen::Vector3d(plate_mid.x(), plate_mid.y(), plate.top_z());
-  return {{"driver", "sim"},
-          {"machine", planner::to_json(machine)},
-          {"plate", planner::to_json(plate)},
+  return {{"machine", description::to_json(machine)},
+          {"plate", description::to_json(plate)},
           {"plate_pose", pose_json(T_M_S * T_S_P)},
           {"part", {{"mesh", model_file.string()}, {"scale", request.scale}}},
           {"part_pose", pose_json(T_S_P.inverse())},
@@ -71,13 +70,13 @@ void recover(hal::Cmm& cmm) {
 }  // namespace
 
 nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& config, const ModelStore& models,
-                            const hal::MachineInfo* info, const geometry::CancelCheck& cancel) {
+                            const description::MachineDescription* info, const geometry::CancelCheck& cancel) {
   const JobRequest request = parse_job_request(params, config, true);
   const std::filesystem::path model_file = models.resolve(request.model);
   const ReferenceModel model = load_reference_model(model_file, request, config.description.travel_box, cancel);
   std::vector<std::string> notes;
   const Eigen::Isometry3d T_M_S = preview_registration(request, notes);
-  const planner::MachineDescription machine =
+  const description::MachineDescription machine =
       info ? machine_for_job(config.description, *info) : config.description;
   if (!info) notes.push_back("the machine could not be read: planned for the configured tip radii");
   const planner::MeasurementPlan plan = plan_job(model, T_M_S, machine, request, cancel);

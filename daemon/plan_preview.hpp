@@ -7,7 +7,7 @@
 #include "daemon/daemon_config.hpp"
 #include "daemon/model_store.hpp"
 #include "geometry/cancellation.hpp"
-#include "hal/machine_info.hpp"
+#include "hal/description/machine_description.hpp"
 
 namespace cmm::daemon {
 
@@ -16,6 +16,6 @@ namespace cmm::daemon {
 // machine's, when it can be read (its tips' qualified radii), else null. Throws RpcError, and
 // geometry::Cancelled when `cancel` asks (its client gone, cmmd stopping) between steps or touches.
 nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& config, const ModelStore& models,
-                            const hal::MachineInfo* info, const geometry::CancelCheck& cancel = {});
+                            const description::MachineDescription* info, const geometry::CancelCheck& cancel = {});
 
 }  // namespace cmm::daemon

@@ -1,3 +1,4 @@
+// The JSON-RPC error codes' helpers and the connection roles' names.
 #include "daemon/rpc_error.hpp"
 
 namespace cmm::daemon {
@@ -13,6 +14,12 @@ const char* to_string(Role role) {
 
 void throw_invalid_param(const std::string& path, const std::string& message) {
   throw RpcError(rpc_code::invalid_params, (path.empty() ? "params" : path) + ": " + message, {{"path", path}});
+}
+
+RpcError invalid_params(const description::FieldError& refused) {
+  nlohmann::json problems = nlohmann::json::array();
+  for (const description::FieldProblem& p : refused.problems()) problems.push_back({{"path", p.pointer}, {"message", p.message}});
+  return RpcError(rpc_code::invalid_params, refused.what(), {{"path", refused.pointer()}, {"problems", problems}});
 }
 
 Role role_from_string(const std::string& text) {

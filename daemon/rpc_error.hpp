@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hal/description/json_fields.hpp"
+
 namespace cmm::daemon {
 
 namespace rpc_code {
@@ -50,6 +52,9 @@ class RpcError : public std::runtime_error {
 // −32602 for the member at JSON Pointer `path` of a request's params ("" for params itself): the
 // message names the member, the data carries its path for a client to point at the field.
 [[noreturn]] void throw_invalid_param(const std::string& path, const std::string& message);
+// −32602 for params the field checker refused: data.path is the first bad field's pointer, and
+// data.problems lists every one ({"path", "message"}).
+RpcError invalid_params(const description::FieldError& refused);
 
 // Who a connection is: each method needs at least one of these (docs/api.md, Access).
 enum class Role { none, observer, operator_ };

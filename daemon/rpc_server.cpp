@@ -254,7 +254,7 @@ void RpcServer::stop() {
 json RpcServer::auth(const json& params, RpcContext& ctx) {
   const auto token = params.find("token");
   if (!params.is_object() || token == params.end() || !token->is_string())
-    throw RpcError(rpc_code::invalid_params, "server.auth needs {\"token\": string}", {{"path", "/token"}});
+    throw_invalid_param("/token", "server.auth needs {\"token\": string}");
   std::optional<Role> granted;
   {
     std::lock_guard lock(tokens_mutex_);
@@ -286,15 +286,15 @@ json RpcServer::auth(const json& params, RpcContext& ctx) {
 json RpcServer::subscribe(const json& params, RpcContext& ctx) {
   const auto topics = params.find("topics");
   if (!params.is_object() || topics == params.end() || !topics->is_array())
-    throw RpcError(rpc_code::invalid_params, "server.subscribe needs {\"topics\": [string, ...]}", {{"path", "/topics"}});
+    throw_invalid_param("/topics", "server.subscribe needs {\"topics\": [string, ...]}");
   std::vector<std::string> wanted;
   for (std::size_t i = 0; i < topics->size(); ++i) {
     const json& topic = (*topics)[i];
     const bool known = topic.is_string() && std::find(options_.topics.begin(), options_.topics.end(),
                                                       topic.get_ref<const std::string&>()) != options_.topics.end();
     if (!known)
-      throw RpcError(rpc_code::invalid_params, "unknown topic " + to_wire(topic) + " (known: " + json(options_.topics).dump() + ")",
-                     {{"path", "/topics/" + std::to_string(i)}});
+      throw_invalid_param("/topics/" + std::to_string(i),
+                          "unknown topic " + to_wire(topic) + " (known: " + json(options_.topics).dump() + ")");
     wanted.push_back(topic);
   }
   return {{"topics", ctx.subscribe(wanted)}};

@@ -6,6 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "hal/description/eigen_json.hpp"
 #include "daemon/plan_preview.hpp"
 #include "daemon/touch_motion.hpp"
 #include "geometry/file_error.hpp"
@@ -50,7 +51,7 @@ nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
     s.machine.bring_up();
     // A job stopped mid-touch left the ball on its search line: out the way it came first.
     if (const auto line = s.machine.touch_in_progress(); line && s.machine.cmm().status().homed) {
-      const planner::MachineDescription& d = s.config.description;
+      const description::MachineDescription& d = s.config.description;
       leave_touch(s.machine.cmm(), line->start, line->direction, d.clearance_z, {0, d.probe_speed_mm_s}, check_stop);
       s.machine.left_touch();
     }
@@ -64,8 +65,6 @@ nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
   }
 }
 
-nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
 void add_machine_methods(RpcDispatcher& d, Service& s) {
   d.add("machine.status", {Role::observer, Work::blocking, [&s](const nlohmann::json&, RpcContext&) {
           nlohmann::json j = s.machine.status_json();
@@ -77,7 +76,7 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
             check_stop();
             cmm.home();
             s.machine.left_touch();  // the operator homed it: wherever the ball was, it is home now
-            return nlohmann::json{{"position", vec(cmm.status().position)}};
+            return nlohmann::json{{"position", description::vec3_json(cmm.status().position)}};
           });
         }});
   // stop and abort run on the io thread: they must never wait behind a slow method.
@@ -115,11 +114,11 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
   d.add("machine.qualify", {Role::operator_, Work::blocking, [&s](const nlohmann::json& params, RpcContext&) {
           const std::string tip = text(params, "tip", "");
           return with_machine(s, "machine.qualify", [&](hal::Cmm& cmm, const std::function<void()>& check_stop) {
-            const hal::MachineInfo info = cmm.info();
+            const description::MachineDescription info = cmm.info();
             const std::string id = tip.empty() ? info.active_tip : tip;
             std::string known;
             bool found = false;
-            for (const hal::TipInfo& t : info.tips) {
+            for (const description::StylusTip& t : info.tips) {
               known += (known.empty() ? "" : ", ") + t.id;
               found = found || t.id == id;
             }
@@ -130,11 +129,11 @@ void add_machine_methods(RpcDispatcher& d, Service& s) {
             }
             hal::QualificationOptions options;
             options.before_motion = check_stop;
-            const hal::TipQualification q = s.machine.qualify(id, options);
+            const description::TipQualification q = s.machine.qualify(id, options);
             spdlog::info("tip {} qualified: r {:.5f} mm, rms {:.5f} mm", id, q.ball_radius_mm, q.residual_rms_mm);
             return nlohmann::json{{"tip", id},
                                   {"ball_radius_mm", q.ball_radius_mm},
-                                  {"offset", vec(q.offset)},
+                                  {"offset", description::vec3_json(q.offset)},
                                   {"residual_rms_mm", q.residual_rms_mm},
                                   {"touches", q.touches},
                                   {"time_utc", q.time_utc}};
@@ -157,7 +156,7 @@ void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
           return nlohmann::json{{"model", st.model}, {"received", st.received}, {"complete", st.complete}};
         }});
   d.add("plan.preview", {Role::observer, Work::planning, [&s](const nlohmann::json& p, RpcContext& ctx) {
-          std::optional<hal::MachineInfo> info;
+          std::optional<description::MachineDescription> info;
           try {  // only read: an observer's preview never connects or enables the machine
             info = s.machine.cmm().info();
           } catch (const std::exception& e) {
@@ -175,7 +174,7 @@ void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
   d.add("registration.fit", {Role::observer, Work::blocking, [&s](const nlohmann::json& p, RpcContext&) {
           try {
             nlohmann::json input = p;
-            if (!input.contains("plate")) input["plate"] = planner::to_json(s.config.plate);
+            if (!input.contains("plate")) input["plate"] = description::to_json(s.config.plate);
             const planner::RegistrationResult r =
                 planner::fit_registration(planner::registration_from_json(input, "registration.fit"));
             return planner::to_json(r);
@@ -183,10 +182,10 @@ void add_model_and_plan_methods(RpcDispatcher& d, Service& s) {
             throw RpcError(rpc_code::registration_error, e.what(), {{"corners", e.corners()}});
           } catch (const RpcError&) {
             throw;
-          } catch (const geometry::FileError& e) {  // a field of the params, named by its JSON Pointer
-            throw RpcError(rpc_code::invalid_params, e.what(), {{"path", e.json_pointer()}});
+          } catch (const description::FieldError& e) {  // every bad field of the params, by its JSON Pointer
+            throw invalid_params(e);
           } catch (const std::exception& e) {
-            throw RpcError(rpc_code::invalid_params, e.what(), {{"path", ""}});
+            throw_invalid_param("", e.what());
           }
         }});
 }

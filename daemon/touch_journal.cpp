@@ -10,20 +10,18 @@
 
 #include <nlohmann/json.hpp>
 
-#include "daemon/atomic_file.hpp"
+#include "hal/description/eigen_json.hpp"
+#include "geometry/atomic_file.hpp"
 #include "geometry/file_error.hpp"
 
 namespace cmm::daemon {
 
 namespace {
-nlohmann::json vec(const hal::Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
 JournalEntry from_json(const nlohmann::json& j) {
   JournalEntry e;
   e.touch_id = j.at("touch").get<int>();
   e.result.contact = j.at("contact").get<bool>();
-  const auto& c = j.at("centre");
-  e.result.centre = hal::Vec3(c.at(0).get<double>(), c.at(1).get<double>(), c.at(2).get<double>());
+  e.result.centre = description::vec3_from_json(j.at("centre"));
   e.result.travel_mm = j.at("travel_mm").get<double>();
   e.result.t_s = j.at("t_s").get<double>();
   e.result.tip_id = j.at("tip").get<std::string>();
@@ -39,7 +37,7 @@ JournalEntry from_json(const nlohmann::json& j) {
 std::string to_json_line(const JournalEntry& e) {
   // nlohmann prints the shortest text that reads back as the same double: a touch read back is the
   // very number that was measured.
-  nlohmann::json j = {{"touch", e.touch_id},        {"contact", e.result.contact}, {"centre", vec(e.result.centre)},
+  nlohmann::json j = {{"touch", e.touch_id},        {"contact", e.result.contact}, {"centre", description::vec3_json(e.result.centre)},
                       {"travel_mm", e.result.travel_mm}, {"t_s", e.result.t_s},     {"tip", e.result.tip_id},
                       {"q", e.qualification}};
   return j.dump();
@@ -85,7 +83,7 @@ TouchJournal::TouchJournal(const std::filesystem::path& file) : file_(file) {
     fd_ = -1;
     fail(file, "cutting the torn last line", error);
   }
-  sync_folder(file.has_parent_path() ? file.parent_path() : ".");
+  geometry::sync_folder(file.has_parent_path() ? file.parent_path() : ".");
 }
 
 TouchJournal::~TouchJournal() {

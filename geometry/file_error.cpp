@@ -17,18 +17,8 @@ FileError FileError::whole(const std::filesystem::path& file, const std::string&
   return FileError(file, file.string() + ": " + message);
 }
 
-FileError FileError::at_field(const std::filesystem::path& file, const std::string& field, std::string pointer,
-                              const std::string& message) {
-  return FileError(file, file.string() + ": " + field + ": " + message, std::move(pointer));
-}
-
-FileError FileError::nested(const FileError& inner, const std::string& prefix) {
-  return FileError(inner.file_, inner.what(), inner.pointer_.empty() ? std::string() : prefix + inner.pointer_,
-                   inner.error_number_);
-}
-
 FileError FileError::system(const std::filesystem::path& file, const std::string& step, int error_number) {
-  return FileError(file, file.string() + ": " + step + ": " + std::strerror(error_number), {}, error_number);
+  return FileError(file, file.string() + ": " + step + ": " + std::strerror(error_number), error_number);
 }
 
 }  // namespace cmm::geometry

@@ -1,5 +1,6 @@
-// The one error every reader and writer throws: it names the file and where in it things went wrong,
-// so an operator can open the file at that line or byte and see the problem.
+// The error every file reader and writer throws: it names the file and where in it things went
+// wrong, so an operator can open the file at that line or byte and see the problem. (A JSON input's
+// bad fields are description::FieldError, which names each by its JSON Pointer.)
 #pragma once
 
 #include <cstdint>
@@ -15,25 +16,17 @@ class FileError : public std::runtime_error {
   static FileError at_line(const std::filesystem::path& file, std::size_t line, const std::string& message);
   static FileError at_byte(const std::filesystem::path& file, std::uint64_t offset, const std::string& message);
   static FileError whole(const std::filesystem::path& file, const std::string& message);
-  // A JSON input's field: what() reads "plate.json: fiducial.corner: …" with the field as written;
-  // `pointer` is its JSON Pointer ("/fiducial/corner"), for a client to point at.
-  static FileError at_field(const std::filesystem::path& file, const std::string& field, std::string pointer,
-                            const std::string& message);
-  // The same error for a field of an object nested at `prefix` ("/plate") in another input.
-  static FileError nested(const FileError& inner, const std::string& prefix);
   // A system call on the file failed: "touches.jsonl: append: No space left on device", and the
   // errno kept, so a caller can tell a full disk (ENOSPC, EDQUOT) from a broken one.
   static FileError system(const std::filesystem::path& file, const std::string& step, int error_number);
 
   const std::filesystem::path& file() const { return file_; }
-  const std::string& json_pointer() const { return pointer_; }  // empty unless at_field
   int error_number() const { return error_number_; }            // errno of the failed call; 0 when none
 
  private:
-  FileError(std::filesystem::path file, const std::string& full_message, std::string pointer = {}, int error_number = 0)
-      : std::runtime_error(full_message), file_(std::move(file)), pointer_(std::move(pointer)), error_number_(error_number) {}
+  FileError(std::filesystem::path file, const std::string& full_message, int error_number = 0)
+      : std::runtime_error(full_message), file_(std::move(file)), error_number_(error_number) {}
   std::filesystem::path file_;
-  std::string pointer_;
   int error_number_ = 0;
 };
 

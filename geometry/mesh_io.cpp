@@ -11,11 +11,12 @@
 #include <cctype>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <string_view>
 
+#include "geometry/atomic_file.hpp"
 #include "geometry/file_error.hpp"
 #include "geometry/mesh_cleanup.hpp"
 #include "geometry/obj_io.hpp"
@@ -92,12 +93,11 @@ class MappedFile {
   std::size_t size_ = 0;
 };
 
+// Written whole in memory first, then atomically: a failed write never leaves half a mesh.
 void write_file(const std::filesystem::path& file, const std::function<void(std::ostream&)>& write) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) throw FileError::whole(file, std::string("cannot create: ") + std::strerror(errno));
+  std::ostringstream out(std::ios::binary);
   write(out);
-  out.close();
-  if (!out) throw FileError::whole(file, std::string("cannot write: ") + std::strerror(errno));
+  write_atomically(file, out.str());
 }
 
 }  // namespace

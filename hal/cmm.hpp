@@ -1,25 +1,29 @@
 // hal::Cmm, the one interface every machine is driven through (DESIGN.md): the simulator, a Modbus
-// machine and a Grbl serial machine each implement it; a driver never knows about jobs.
+// machine and a Grbl serial machine each implement it, through the driver base (hal/cmm_driver.hpp);
+// a driver never knows about jobs.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
-#include "hal/machine_info.hpp"
+#include "hal/description/machine_description.hpp"
+#include "hal/machine_status.hpp"
 #include "hal/motion.hpp"
 
 namespace cmm::hal {
 
 // Lifecycle (ros2_control's habit): configure(block) parses the driver's block, no I/O (a bad block
-// throws ConfigError listing every bad key by JSON path); connect() brings the link up so status()
-// is readable; enable() allows motion. A fault drops an enabled machine back to connected (the caller
-// looks at it, enables again); a fault of the link (CommLost, an unanswered request) to configured.
+// throws description::FieldError naming every bad key by its pointer); connect() brings the link up
+// so status() is readable; enable() allows motion. A fault drops an enabled machine back to
+// connected (the caller looks at it, enables again); a fault of the link (CommLost, an unanswered
+// request) to configured.
 //
-// Threads: home, move, probe and qualify block until done or faulted, one at a time. status(),
-// stop() and abort() may be called from any other thread while they run. A driver never reports a
-// touch it did not see, and after a reconnect it re-reads the machine state and never replays a
-// motion whose outcome it does not know.
+// Threads: home, move and probe block until done or faulted, one at a time. status(), stop() and
+// abort() may be called from any other thread while they run. A driver never reports a touch it did
+// not see, and after a reconnect it re-reads the machine state and never replays a motion whose
+// outcome it does not know.
 class Cmm {
  public:
   virtual ~Cmm() = default;
@@ -30,7 +34,11 @@ class Cmm {
   virtual void disable() = 0;
   virtual void disconnect() = 0;
 
-  virtual MachineInfo info() = 0;
+  // The machine as its configuration describes it, before any connection: a simulator's or a Grbl
+  // machine's machine.json; nullopt for a machine that describes itself only once connected (Modbus).
+  virtual std::optional<description::MachineDescription> configured_machine() const = 0;
+  // The machine as it reports itself (connected): travel box, limits, tips with their qualification.
+  virtual description::MachineDescription info() = 0;
   virtual MachineStatus status() = 0;
 
   virtual void home() = 0;
@@ -44,7 +52,7 @@ class Cmm {
   virtual void select_tip(const std::string& tip_id) = 0;
   // Stores a qualification (hal/qualification.hpp measures it): from now on the tip's offset and
   // radius are the qualified ones, and info() reports them with their time stamp.
-  virtual void record_qualification(const std::string& tip_id, const TipQualification& q) = 0;
+  virtual void record_qualification(const std::string& tip_id, const description::TipQualification& q) = 0;
 };
 
 }  // namespace cmm::hal

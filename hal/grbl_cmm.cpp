@@ -16,7 +16,7 @@
 
 #include <asio.hpp>
 
-#include "hal/config_block.hpp"
+#include "hal/description/json_fields.hpp"
 
 namespace cmm::hal {
 
@@ -26,8 +26,9 @@ std::chrono::duration<double> seconds(double s) { return std::chrono::duration<d
 std::string text(const Vec3& p) { return "(" + grbl::format_coords(p) + ")"; }
 }  // namespace
 
-GrblSettings grbl_settings_from_json(const nlohmann::json& j) {
-  ConfigBlock b(j);
+GrblSettings grbl_settings_from_json(const nlohmann::json& j, const std::string& base_dir) {
+  description::JsonFields b(j);
+  b.expect_object();
   GrblSettings s;
   b.text("driver", "grbl", {"grbl"});
   s.device = b.text("device", s.device);
@@ -41,32 +42,8 @@ GrblSettings grbl_settings_from_json(const nlohmann::json& j) {
   s.poll_interval_s = b.number("poll_interval_s", s.poll_interval_s, 0.0001, 1);
   s.connect_attempts = b.integer("connect_attempts", s.connect_attempts, 1, 100);
   s.connect_backoff_s = b.number("connect_backoff_s", s.connect_backoff_s, 0, 60);
-  ConfigBlock box = b.object("travel_box");
-  s.travel_box.min = box.vec3("min", s.travel_box.min);
-  s.travel_box.max = box.vec3("max", s.travel_box.max);
-  box.finish();
-  if (!(s.travel_box.max.array() > s.travel_box.min.array()).all()) b.problem("travel_box", "max must exceed min on every axis");
-  s.max_speed_mm_s = b.number("max_speed_mm_s", s.max_speed_mm_s, 1e-3, 1e5);
-  s.max_accel_mm_s2 = b.number("max_accel_mm_s2", s.max_accel_mm_s2, 1e-3, 1e6);
-  s.probe_speed_mm_s = b.number("probe_speed_mm_s", s.probe_speed_mm_s, 1e-3, 1e4);
-  for (ConfigBlock& t : b.objects("tips")) {
-    TipInfo tip;
-    tip.id = t.text("id", "");
-    if (tip.id.empty()) t.problem("id", "a tip needs an id");
-    tip.ball_radius_mm = t.number("ball_radius_mm", tip.ball_radius_mm, 1e-3, 100);
-    tip.offset = t.vec3("offset", tip.offset);
-    t.finish();
-    s.tips.push_back(tip);
-  }
-  if (s.tips.empty()) b.problem("tips", "at least one tip is required");
-  s.active_tip = b.text("active_tip", s.tips.empty() ? "" : s.tips.front().id);
-  bool known = false;
-  for (const auto& t : s.tips) known = known || t.id == s.active_tip;
-  if (!s.tips.empty() && !known) b.problem("active_tip", "no tip \"" + s.active_tip + "\" in tips");
-  ConfigBlock sphere = b.object("reference_sphere");
-  s.reference_sphere.centre = sphere.vec3("centre", s.reference_sphere.centre);
-  s.reference_sphere.radius_mm = sphere.number("radius_mm", s.reference_sphere.radius_mm, 0, 1000);
-  sphere.finish();
+  s.machine = description::described(b, "machine", s.machine, base_dir, description::machine_from_json,
+                                     description::read_machine);
   b.finish();
   b.throw_if_problems("grbl driver config");
   return s;
@@ -80,23 +57,25 @@ struct GrblCmm::Port {
   std::string partial;
 };
 
-GrblCmm::GrblCmm() = default;
+GrblCmm::GrblCmm(std::string base_dir) : CmmDriver("the Grbl machine"), base_dir_(std::move(base_dir)) {}
 GrblCmm::~GrblCmm() { disconnect(); }
 
-void GrblCmm::require(Lifecycle at_least, const char* what) const {
-  require_lifecycle(lifecycle_.load(), at_least, what, "the Grbl machine");
+std::optional<description::MachineDescription> GrblCmm::configured_machine() const { return settings_.machine; }
+
+CmmDriver::ConnectPolicy GrblCmm::connect_policy() const {
+  return {settings_.connect_attempts, settings_.connect_backoff_s};
 }
 
-void GrblCmm::configure(const nlohmann::json& block) {
-  if (lifecycle_ >= Lifecycle::connected) throw StateError("configure: disconnect first");
-  settings_ = grbl_settings_from_json(block);
+std::string GrblCmm::where() const { return "the Grbl machine on " + settings_.device; }
+
+void GrblCmm::on_configure(const nlohmann::json& block) {
+  settings_ = grbl_settings_from_json(block, base_dir_);
   active_ = 0;
-  for (std::size_t i = 0; i < settings_.tips.size(); ++i)
-    if (settings_.tips[i].id == settings_.active_tip) active_ = i;
-  lifecycle_ = Lifecycle::configured;
+  for (std::size_t i = 0; i < settings_.machine.tips.size(); ++i)
+    if (settings_.machine.tips[i].id == settings_.machine.active_tip) active_ = i;
 }
 
-const TipInfo& GrblCmm::active() const { return settings_.tips.at(active_); }
+const description::StylusTip& GrblCmm::active() const { return settings_.machine.tips.at(active_); }
 
 void GrblCmm::on_line(const std::string& line) {
   std::lock_guard lock(mutex_);
@@ -127,105 +106,73 @@ void GrblCmm::close_port() {
   port_.reset();
 }
 
-void GrblCmm::connect() {
-  require(Lifecycle::configured, "connect");
-  if (lifecycle_ >= Lifecycle::connected) return;
+void GrblCmm::on_connect() {
   close_port();
-  double backoff = settings_.connect_backoff_s;
-  std::string error;
-  for (int attempt = 0; attempt < settings_.connect_attempts; ++attempt) {
-    if (attempt > 0) std::this_thread::sleep_for(seconds(backoff)), backoff *= 2;
-    {
-      std::lock_guard lock(mutex_);
-      replies_.clear();
-      last_status_.reset();
-      link_down_ = false;
-      in_flight_bytes_ = 0;
-    }
-    auto port = std::make_unique<Port>();
-    asio::error_code ec;
-    port->port.open(settings_.device, ec);
-    if (ec) {
-      error = ec.message();
-      continue;
-    }
-    using sp = asio::serial_port_base;
-    port->port.set_option(sp::baud_rate(static_cast<unsigned>(settings_.baud)), ec);
-    port->port.set_option(sp::character_size(8), ec);
-    port->port.set_option(sp::parity(sp::parity::none), ec);
-    port->port.set_option(sp::stop_bits(sp::stop_bits::one), ec);
-    port->port.set_option(sp::flow_control(sp::flow_control::none), ec);  // a pty refuses some: harmless
-    if (settings_.reset_on_open) {
-      // DTR low then high: an Arduino-class board restarts (a pty has no modem lines and ignores it).
-      int dtr = TIOCM_DTR;
-      ioctl(port->port.native_handle(), TIOCMBIC, &dtr);
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      ioctl(port->port.native_handle(), TIOCMBIS, &dtr);
-    }
-    Port* p = port.get();
-    port_ = std::move(port);
-    struct Reader {
-      GrblCmm* self;
-      Port* p;
-      void operator()() const {
-        p->port.async_read_some(asio::buffer(p->buffer), [self = self, p = p](const asio::error_code& e, std::size_t n) {
-          if (e) return self->on_link_down();
-          for (std::size_t i = 0; i < n; ++i) {
-            const char c = p->buffer[i];
-            if (c == '\n') {
-              self->on_line(p->partial);
-              p->partial.clear();
-            } else if (c != '\r') {
-              p->partial.push_back(c);
-            }
-          }
-          Reader{self, p}();
-        });
-      }
-    };
-    Reader{this, p}();
-    p->thread = std::thread([p] { p->io.run(); });
-    lifecycle_ = Lifecycle::connected;
-    try {
-      if (settings_.reset_on_open) {
-        const auto deadline = Clock::now() + seconds(settings_.reset_wait_s);
-        std::unique_lock lock(mutex_);
-        wake_.wait_until(lock, deadline, [&] {
-          for (const auto& line : replies_)
-            if (line.rfind("Grbl ", 0) == 0) return true;
-          return link_down_;
-        });
-      }
-      const grbl::StatusReport s = flush_old_line(query_status("connect"));
-      if (s.state == "Idle") setup_modes();
-      return;
-    } catch (const Fault& f) {
-      error = f.what();
-      lifecycle_ = Lifecycle::configured;
-      close_port();
-    }
+  {
+    std::lock_guard lock(mutex_);
+    replies_.clear();
+    last_status_.reset();
+    link_down_ = false;
+    in_flight_bytes_ = 0;
   }
-  throw CommLost("cannot reach the Grbl machine on " + settings_.device + " after " +
-                 std::to_string(settings_.connect_attempts) + " attempts: " + error);
+  auto port = std::make_unique<Port>();
+  asio::error_code ec;
+  port->port.open(settings_.device, ec);
+  if (ec) throw CommLost(ec.message());
+  using sp = asio::serial_port_base;
+  port->port.set_option(sp::baud_rate(static_cast<unsigned>(settings_.baud)), ec);
+  port->port.set_option(sp::character_size(8), ec);
+  port->port.set_option(sp::parity(sp::parity::none), ec);
+  port->port.set_option(sp::stop_bits(sp::stop_bits::one), ec);
+  port->port.set_option(sp::flow_control(sp::flow_control::none), ec);  // a pty refuses some: harmless
+  if (settings_.reset_on_open) {
+    // DTR low then high: an Arduino-class board restarts (a pty has no modem lines and ignores it).
+    int dtr = TIOCM_DTR;
+    ioctl(port->port.native_handle(), TIOCMBIC, &dtr);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    ioctl(port->port.native_handle(), TIOCMBIS, &dtr);
+  }
+  Port* p = port.get();
+  port_ = std::move(port);
+  struct Reader {
+    GrblCmm* self;
+    Port* p;
+    void operator()() const {
+      p->port.async_read_some(asio::buffer(p->buffer), [self = self, p = p](const asio::error_code& e, std::size_t n) {
+        if (e) return self->on_link_down();
+        for (std::size_t i = 0; i < n; ++i) {
+          const char c = p->buffer[i];
+          if (c == '\n') {
+            self->on_line(p->partial);
+            p->partial.clear();
+          } else if (c != '\r') {
+            p->partial.push_back(c);
+          }
+        }
+        Reader{self, p}();
+      });
+    }
+  };
+  Reader{this, p}();
+  p->thread = std::thread([p] { p->io.run(); });
+  if (settings_.reset_on_open) {
+    const auto deadline = Clock::now() + seconds(settings_.reset_wait_s);
+    std::unique_lock lock(mutex_);
+    wake_.wait_until(lock, deadline, [&] {
+      for (const auto& line : replies_)
+        if (line.rfind("Grbl ", 0) == 0) return true;
+      return link_down_;
+    });
+  }
+  const grbl::StatusReport s = flush_old_line(query_status("connect"));
+  if (s.state == "Idle") setup_modes();
 }
 
-void GrblCmm::enable() {
-  require(Lifecycle::connected, "enable");
-  lifecycle_ = Lifecycle::enabled;
-}
+void GrblCmm::on_disconnect() { close_port(); }
 
-void GrblCmm::disable() {
-  if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
-}
-
-void GrblCmm::disconnect() {
-  close_port();
-  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
-}
-
-void GrblCmm::drop_link() {
+void GrblCmm::link_out_of_step() {
   unanswered_ = true;
-  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+  drop_link();
 }
 
 grbl::StatusReport GrblCmm::flush_old_line(grbl::StatusReport s) {
@@ -274,7 +221,7 @@ void GrblCmm::send(const std::string& bytes, const char* what) {
   // reader's pending read is on the same descriptor, which POSIX allows; handing each write to the
   // reader's thread and back cost as much as the round trip on the line (docs/PERFORMANCE.md).
   std::lock_guard lock(write_mutex_);
-  if (!port_ || lifecycle_ < Lifecycle::connected) throw CommLost(std::string(what) + ": the Grbl link is down");
+  if (!port_ || !link_up()) throw CommLost(std::string(what) + ": the Grbl link is down");
   const int fd = port_->port.native_handle();
   const auto deadline = Clock::now() + seconds(settings_.status_timeout_s);
   for (std::size_t done = 0; done < bytes.size();) {
@@ -305,7 +252,7 @@ grbl::StatusReport GrblCmm::query_status(const char* what) {
   if (!wake_.wait_for(lock, seconds(settings_.status_timeout_s), [&] { return status_seq_ > seq || link_down_; }) ||
       link_down_) {
     lock.unlock();
-    if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+    drop_link();
     throw CommLost(std::string(what) + ": no status report within " + std::to_string(settings_.status_timeout_s) +
                    " s: the Grbl link is gone");
   }
@@ -343,8 +290,8 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
   } release{this, bytes};
   // A stop or abort that came between the lines of one call ends the call here: an idle Grbl
   // ignores a feed hold and stays homed after a soft reset, so the next line would otherwise run.
-  if (motion && (aborted_ || stop_requested_))
-    throw Aborted(std::string(what) + (aborted_ ? ": aborted" : ": stopped by stop()") + " before the next line");
+  if (motion && (abort_requested_ || stop_requested_))
+    throw Aborted(std::string(what) + (abort_requested_ ? ": aborted" : ": stopped by stop()") + " before the next line");
   unanswered_ = true;  // until its final answer: ok, error:N, ALARM:N, or the banner of a reset
   send(line + "\n", what);
 
@@ -365,7 +312,7 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
       wake_.wait_for(lock, seconds(settings_.poll_interval_s), [&] { return !replies_.empty() || link_down_; });
       if (link_down_) {
         lock.unlock();
-        drop_link();
+        link_out_of_step();
         throw CommLost(std::string(what) + ": the Grbl link dropped");
       }
       if (!replies_.empty()) {
@@ -385,7 +332,7 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
     const auto now = Clock::now();
     if (reply.empty()) {
       if (unanswered != Clock::time_point{} && now - unanswered > seconds(settings_.status_timeout_s)) {
-        drop_link();
+        link_out_of_step();
         throw CommLost(std::string(what) + ": no status report within " + std::to_string(settings_.status_timeout_s) +
                        " s: the Grbl link is gone");
       }
@@ -397,7 +344,7 @@ GrblCmm::LineResult GrblCmm::transact(const std::string& line, const char* what,
         } catch (const Fault&) {
         }
         // Its ok may still come, and would answer the next line: the link is out of step.
-        drop_link();
+        link_out_of_step();
         throw Timeout(std::string(what) + ": no answer to \"" + line + "\" within " +
                       std::to_string(idle ? settings_.response_timeout_s : limit) + " s; the link is down until connect()");
       }
@@ -446,97 +393,63 @@ void GrblCmm::alarm(int code, const char* what) {
   throw_fault(grbl::fault_from_alarm(code), message);
 }
 
-template <class F>
-auto GrblCmm::motion(const char* what, F&& f) {
-  require(Lifecycle::enabled, what);
-  try {
-    if (aborted_) throw Aborted(std::string(what) + ": abort is latched; reset() first");
-    abort_requested_ = false;
-    stop_requested_ = false;  // a stop of an earlier call; one during this call ends it at its next line
-    auto result = f();
-    std::lock_guard lock(mutex_);
-    fault_.reset();
-    fault_message_.clear();
-    return result;
-  } catch (const Fault& fault) {
-    {
-      std::lock_guard lock(mutex_);
-      fault_ = fault.kind();
-      fault_message_ = fault.what();
-    }
-    if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
-    throw;
-  }
+void GrblCmm::begin_motion() {
+  stop_requested_ = false;  // a stop of an earlier call; one during this call ends it at its next line
 }
 
-MachineInfo GrblCmm::info() {
-  require(Lifecycle::connected, "info");
-  MachineInfo info;
-  info.driver = "grbl";
-  info.description = "Grbl 1.1 machine on " + settings_.device;
-  info.travel_box = settings_.travel_box;
-  info.max_speed_mm_s = settings_.max_speed_mm_s;
-  info.max_accel_mm_s2 = settings_.max_accel_mm_s2;
-  info.probe_speed_mm_s = settings_.probe_speed_mm_s;
-  info.reference_sphere = settings_.reference_sphere;
+description::MachineDescription GrblCmm::read_info() {
+  description::MachineDescription info = settings_.machine;
+  info.name = "Grbl 1.1 machine on " + settings_.device;
   std::lock_guard lock(mutex_);  // select_tip() and record_qualification() write these
-  info.tips = settings_.tips;
+  info.tips = settings_.machine.tips;
   info.active_tip = active().id;
   return info;
 }
 
-MachineStatus GrblCmm::status() {
-  require(Lifecycle::connected, "status");
+MachineStatus GrblCmm::read_status() {
   const grbl::StatusReport r = query_status("status");
   MachineStatus s;
-  s.lifecycle = lifecycle_;
   s.homed = r.state != "Alarm" && r.state != "Home";  // homing is enforced: an unhomed Grbl is in Alarm
   s.moving = r.state == "Run" || r.state == "Home" || r.state == "Jog" || (r.state == "Hold" && r.substate == 1);
   s.estop = r.pins.find('R') != std::string::npos;
-  s.aborted = aborted_;
   s.t_s = r.clock_s.value_or(0);
   std::lock_guard lock(mutex_);  // the tip may be changed by select_tip() on the motion thread
   s.position = r.mpos + active().offset;
   s.tip_id = active().id;
-  s.fault = fault_;
-  s.fault_message = fault_message_;
   return s;
 }
 
 std::optional<grbl::ProbeReport> GrblCmm::guarded(const Vec3& ball_target, double speed_mm_s, bool fail_on_miss,
                                                   const char* what) {
-  const double feed = std::min(speed_mm_s > 0 ? speed_mm_s : settings_.max_speed_mm_s, settings_.max_speed_mm_s) * 60;
+  const double max_speed = settings_.machine.max_speed_mm_s;
+  const double feed = std::min(speed_mm_s > 0 ? speed_mm_s : max_speed, max_speed) * 60;
   const std::string line = std::string(fail_on_miss ? "G38.2" : "G38.3") + "X" + grbl::format_number(mpos_of(ball_target).x()) +
                            "Y" + grbl::format_number(mpos_of(ball_target).y()) + "Z" +
                            grbl::format_number(mpos_of(ball_target).z()) + "F" + grbl::format_number(feed);
   return transact(line, what, true).probe;
 }
 
-void GrblCmm::home() {
-  motion("home", [&] {
-    transact("$H", "home", true);
-    setup_modes();
-    return 0;
-  });
+void GrblCmm::do_home() {
+  transact("$H", "home", true);
+  setup_modes();
 }
 
-void GrblCmm::move(const Move& m) {
-  motion("move", [&] {
-    if (!settings_.travel_box.contains(m.target))
+void GrblCmm::do_move(const Move& m) {
+  {
+    if (!settings_.machine.travel_box.contains(m.target))
       throw SoftLimit("move target " + text(m.target) + " is outside the travel box");
     const Vec3 here = status().position;
-    if ((here - m.target).norm() < 1e-9) return 0;
+    if ((here - m.target).norm() < 1e-9) return;
     // Grbl watches the probe only during G38.x: guarded travel is a G38.3 toward the target.
     auto prb = guarded(m.target, m.speed_mm_s, false, "move");
     if (prb && prb->success)
       throw EarlyTrigger("the probe triggered during a guarded move at " + text(prb->position + active().offset) +
                          " on the way to " + text(m.target));
-    return 0;
-  });
+  }
 }
 
-TouchResult GrblCmm::probe(const ProbeMove& p) {
-  return motion("probe", [&] {
+TouchResult GrblCmm::do_probe(const ProbeMove& p) {
+  {
     const double length = p.direction.norm();
     if (!p.direction.allFinite() || !(length > 0.5 && length < 2))
       throw std::invalid_argument("probe direction must be a unit vector");
@@ -546,12 +459,12 @@ TouchResult GrblCmm::probe(const ProbeMove& p) {
     const Vec3 end = p.start + d * p.max_travel_mm;
     for (const auto& [point, name] : {std::pair{p.start, "probe start"}, std::pair{end, "probe end"},
                                       std::pair{Vec3(p.start - d * std::max(0.0, p.retract_mm - p.min_travel_mm)), "probe retract"}})
-      if (!settings_.travel_box.contains(point)) throw SoftLimit(std::string(name) + " " + text(point) + " is outside the travel box");
+      if (!settings_.machine.travel_box.contains(point)) throw SoftLimit(std::string(name) + " " + text(point) + " is outside the travel box");
     if ((status().position - p.start).norm() > 1e-9) {
       auto prb = guarded(p.start, 0, false, "probe");
       if (prb && prb->success) throw EarlyTrigger("the probe triggered on the way to the search start " + text(p.start));
     }
-    const double speed = p.speed_mm_s > 0 ? p.speed_mm_s : settings_.probe_speed_mm_s;
+    const double speed = p.speed_mm_s > 0 ? p.speed_mm_s : settings_.machine.probe_speed_mm_s;
     std::optional<grbl::ProbeReport> prb;
     try {
       prb = guarded(end, speed, p.fail_on_miss, "probe");
@@ -577,11 +490,11 @@ TouchResult GrblCmm::probe(const ProbeMove& p) {
       if (back && back->success) throw EarlyTrigger("the probe triggered while retracting from " + text(r.centre));
     }
     return r;
-  });
+  }
 }
 
-void GrblCmm::stop() {
-  if (lifecycle_ < Lifecycle::connected || !port_) return;
+void GrblCmm::do_stop() {
+  if (!link_up() || !port_) return;
   stop_requested_ = true;
   send(std::string(1, grbl::kFeedHold), "stop");
   // Feed hold brakes on the path; a soft reset once it has come to rest (Hold:0) keeps the position,
@@ -605,16 +518,13 @@ void GrblCmm::stop() {
   throw Timeout("stop: the Grbl machine did not come to rest");
 }
 
-void GrblCmm::abort() {
-  aborted_ = true;
+void GrblCmm::do_abort() {
   abort_requested_ = true;
-  if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
-  if (lifecycle_ < Lifecycle::connected || !port_) return;
+  if (!link_up() || !port_) return;
   send(std::string(1, grbl::kSoftReset), "abort");  // at once: a motion in progress loses the position
 }
 
-void GrblCmm::reset() {
-  require(Lifecycle::connected, "reset");
+void GrblCmm::do_reset() {
   {
     std::lock_guard lock(mutex_);
     replies_.clear();
@@ -628,29 +538,25 @@ void GrblCmm::reset() {
   });
   if (!banner || link_down_) {
     lock.unlock();
-    drop_link();  // a banner that comes late would end the next motion as a restart
+    link_out_of_step();  // a banner that comes late would end the next motion as a restart
     throw Timeout("reset: no banner from the Grbl machine after a soft reset; the link is down until connect()");
   }
-  aborted_ = abort_requested_ = false;
-  fault_.reset();
-  fault_message_.clear();
+  abort_requested_ = false;
 }
 
-void GrblCmm::select_tip(const std::string& tip_id) {
-  require(Lifecycle::connected, "select_tip");
+void GrblCmm::do_select_tip(const std::string& tip_id) {
   std::lock_guard lock(mutex_);
-  for (std::size_t i = 0; i < settings_.tips.size(); ++i)
-    if (settings_.tips[i].id == tip_id) {
+  for (std::size_t i = 0; i < settings_.machine.tips.size(); ++i)
+    if (settings_.machine.tips[i].id == tip_id) {
       active_ = i;
       return;
     }
   throw std::invalid_argument("no tip \"" + tip_id + "\" in the Grbl driver's config");
 }
 
-void GrblCmm::record_qualification(const std::string& tip_id, const TipQualification& q) {
-  require(Lifecycle::connected, "record_qualification");
+void GrblCmm::do_record_qualification(const std::string& tip_id, const description::TipQualification& q) {
   std::lock_guard lock(mutex_);
-  for (auto& tip : settings_.tips)
+  for (auto& tip : settings_.machine.tips)
     if (tip.id == tip_id) {
       tip.ball_radius_mm = q.ball_radius_mm;
       tip.offset = q.offset;

@@ -1,6 +1,6 @@
 // hal::Cmm over a serial line speaking Grbl 1.1 (hal/grbl_protocol.hpp; docs/hal.md "Grbl 1.1
 // dialect"): guarded travel and searches as G38.3/G38.2 in machine coordinates, status by the
-// real-time `?`, stop as feed hold then soft reset, and the tips and travel box kept driver-side.
+// real-time `?`, stop as feed hold then soft reset, and the machine description kept driver-side.
 #pragma once
 
 #include <atomic>
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "hal/cmm.hpp"
+#include "hal/cmm_driver.hpp"
 #include "hal/grbl_protocol.hpp"
 
 namespace cmm::hal {
@@ -28,36 +28,38 @@ struct GrblSettings {
   double poll_interval_s = 0.01;   // `?` while a motion runs
   int connect_attempts = 4;
   double connect_backoff_s = 0.05;  // doubled after each failed attempt
-  // What Grbl does not know: the machine's description (machine.json's schema, in part).
-  TravelBox travel_box;
-  double max_speed_mm_s = 100, max_accel_mm_s2 = 500, probe_speed_mm_s = 5;
-  std::vector<TipInfo> tips;
-  std::string active_tip;
-  ReferenceSphereInfo reference_sphere;
+  // What Grbl does not know: the machine's description ("machine": machine.json inline or its file
+  // name; the built-in config/machine.json without one).
+  description::MachineDescription machine = description::default_machine();
 };
 
-GrblSettings grbl_settings_from_json(const nlohmann::json& block);  // throws ConfigError
+// Relative file names in the block resolve against `base_dir`. Throws description::FieldError.
+GrblSettings grbl_settings_from_json(const nlohmann::json& block, const std::string& base_dir = ".");
 
-class GrblCmm : public Cmm {
+class GrblCmm : public CmmDriver {
  public:
-  GrblCmm();
+  explicit GrblCmm(std::string base_dir = ".");
   ~GrblCmm() override;
 
-  void configure(const nlohmann::json& block) override;
-  void connect() override;
-  void enable() override;
-  void disable() override;
-  void disconnect() override;
-  MachineInfo info() override;
-  MachineStatus status() override;
-  void home() override;
-  void move(const Move& move) override;
-  TouchResult probe(const ProbeMove& move) override;
-  void stop() override;
-  void abort() override;
-  void reset() override;
-  void select_tip(const std::string& tip_id) override;
-  void record_qualification(const std::string& tip_id, const TipQualification& q) override;
+  std::optional<description::MachineDescription> configured_machine() const override;
+
+ protected:
+  ConnectPolicy connect_policy() const override;
+  std::string where() const override;
+  void on_configure(const nlohmann::json& block) override;
+  void on_connect() override;
+  void on_disconnect() override;
+  description::MachineDescription read_info() override;
+  MachineStatus read_status() override;
+  void begin_motion() override;
+  void do_home() override;
+  void do_move(const Move& move) override;
+  TouchResult do_probe(const ProbeMove& move) override;
+  void do_stop() override;
+  void do_abort() override;
+  void do_reset() override;
+  void do_select_tip(const std::string& tip_id) override;
+  void do_record_qualification(const std::string& tip_id, const description::TipQualification& q) override;
 
  private:
   struct Port;  // the Asio serial port and its reader thread
@@ -65,9 +67,6 @@ class GrblCmm : public Cmm {
     std::vector<std::string> messages;  // [PRB:…], [MSG:…] before the ok
     std::optional<grbl::ProbeReport> probe;
   };
-  void require(Lifecycle at_least, const char* what) const;
-  template <class F>
-  auto motion(const char* what, F&& f);
   void send(const std::string& bytes, const char* what);
   void on_line(const std::string& line);
   void on_link_down();
@@ -75,19 +74,19 @@ class GrblCmm : public Cmm {
   // Sends one line (counting into Grbl's RX buffer) and waits for its ok; error:N and ALARM:N throw.
   LineResult transact(const std::string& line, const char* what, bool motion);
   [[noreturn]] void alarm(int code, const char* what);
-  // The link is out of step (a line's answer may still come): down to configured until connect().
-  void drop_link();
+  // The link is out of step (a line's answer may still come): down until connect().
+  void link_out_of_step();
   // At connect: a line still running (or whose answer this driver gave up on) is brought to rest
   // and flushed, so that its ok cannot answer the next line. Returns the status after.
   grbl::StatusReport flush_old_line(grbl::StatusReport s);
   void setup_modes();
-  const TipInfo& active() const;
+  const description::StylusTip& active() const;
   Vec3 mpos_of(const Vec3& ball) const { return ball - active().offset; }
   std::optional<grbl::ProbeReport> guarded(const Vec3& ball_target, double speed_mm_s, bool fail_on_miss, const char* what);
   void close_port();
 
+  std::string base_dir_;
   GrblSettings settings_;
-  std::atomic<Lifecycle> lifecycle_{Lifecycle::unconfigured};
   std::unique_ptr<Port> port_;
   std::mutex line_mutex_;  // one line in flight at a time
   std::mutex write_mutex_;  // one writer on the descriptor; close_port() waits for it
@@ -101,9 +100,7 @@ class GrblCmm : public Cmm {
   std::size_t in_flight_bytes_ = 0;
   std::atomic<bool> unanswered_{false};  // a line was sent whose final answer never came
 
-  std::atomic<bool> stop_requested_{false}, abort_requested_{false}, aborted_{false};
-  std::optional<FaultKind> fault_;
-  std::string fault_message_;
+  std::atomic<bool> stop_requested_{false}, abort_requested_{false};
   std::size_t active_ = 0;
 };
 

@@ -98,11 +98,23 @@ std::optional<StatusReport> parse_status(const std::string& line) {
 }
 
 std::string format_status(const StatusReport& r) {
-  std::string out = "<" + r.state + (r.substate >= 0 ? ":" + std::to_string(r.substate) : "") + "|MPos:" +
-                    format_coords(r.mpos) + "|FS:" + format_number(r.feed_mm_min) + ",0";
+  // Appended piece by piece: GCC 12 at -O3 reports a false -Wrestrict for "literal" + a temporary
+  // std::string (GCC bug 105329).
+  std::string out = "<";
+  out += r.state;
+  if (r.substate >= 0) {
+    out += ':';
+    out += std::to_string(r.substate);
+  }
+  out += "|MPos:";
+  out += format_coords(r.mpos);
+  out += "|FS:";
+  out += format_number(r.feed_mm_min);
+  out += ",0";
   if (!r.pins.empty()) out += "|Pn:" + r.pins;
   if (r.clock_s) out += "|T:" + format_number(*r.clock_s);
-  return out + ">";
+  out += '>';
+  return out;
 }
 
 std::optional<ProbeReport> parse_probe(const std::string& line) {

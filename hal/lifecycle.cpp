@@ -1,7 +1,5 @@
-// Lifecycle names for status reports and errors.
-#include "hal/machine_info.hpp"
-
-#include <string>
+// Lifecycle names, for status reports and the driver base's errors.
+#include "hal/machine_status.hpp"
 
 namespace cmm::hal {
 
@@ -13,11 +11,6 @@ const char* to_string(Lifecycle state) {
     case Lifecycle::enabled: return "enabled";
   }
   return "unknown";
-}
-
-void require_lifecycle(Lifecycle now, Lifecycle needed, const char* what, const char* machine) {
-  if (now < needed)
-    throw StateError(std::string(what) + ": " + machine + " is " + to_string(now) + ", needs " + to_string(needed));
 }
 
 }  // namespace cmm::hal

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "hal/config_block.hpp"
+#include "hal/description/json_fields.hpp"
 #include "hal/modbus_map.hpp"
 #include "hal/modbus_status.hpp"
 #include "hal/utc_time.hpp"
@@ -17,7 +17,8 @@ namespace mb = modbus;
 using Clock = std::chrono::steady_clock;
 
 ModbusSettings modbus_settings_from_json(const nlohmann::json& j) {
-  ConfigBlock b(j);
+  description::JsonFields b(j);
+  b.expect_object();
   ModbusSettings s;
   b.text("driver", "modbus", {"modbus"});
   s.transport = b.text("transport", s.transport, {"tcp", "rtu"});
@@ -42,17 +43,20 @@ ModbusSettings modbus_settings_from_json(const nlohmann::json& j) {
   return s;
 }
 
+ModbusCmm::ModbusCmm() : CmmDriver("the Modbus machine") {}
 ModbusCmm::~ModbusCmm() { disconnect(); }
 
-void ModbusCmm::require(Lifecycle at_least, const char* what) const {
-  require_lifecycle(lifecycle_.load(), at_least, what, "the Modbus machine");
+CmmDriver::ConnectPolicy ModbusCmm::connect_policy() const {
+  return {settings_.connect_attempts, settings_.connect_backoff_s};
 }
 
-void ModbusCmm::configure(const nlohmann::json& block) {
-  if (lifecycle_ >= Lifecycle::connected) throw StateError("configure: disconnect first");
-  settings_ = modbus_settings_from_json(block);
-  lifecycle_ = Lifecycle::configured;
+std::string ModbusCmm::endpoint() const {
+  return settings_.transport == "rtu" ? settings_.device : settings_.host + ":" + std::to_string(settings_.port);
 }
+
+std::string ModbusCmm::where() const { return "the Modbus machine at " + endpoint(); }
+
+void ModbusCmm::on_configure(const nlohmann::json& block) { settings_ = modbus_settings_from_json(block); }
 
 modbus_t* ModbusCmm::open_context() const {
   modbus_t* ctx = settings_.transport == "rtu"
@@ -79,72 +83,47 @@ void ModbusCmm::close_contexts() {
     }
 }
 
-void ModbusCmm::connect() {
-  require(Lifecycle::configured, "connect");
-  if (lifecycle_ >= Lifecycle::connected) return;
+void ModbusCmm::on_connect() {
   stop_heartbeat();  // a link that dropped left its heartbeat thread behind
   close_contexts();
-  const std::string where = settings_.transport == "rtu" ? settings_.device : settings_.host + ":" + std::to_string(settings_.port);
-  double backoff = settings_.connect_backoff_s;
-  int error = 0;
-  for (int attempt = 0; attempt < settings_.connect_attempts; ++attempt) {
-    if (attempt > 0) std::this_thread::sleep_for(std::chrono::duration<double>(backoff)), backoff *= 2;
-    modbus_t* command = open_context();
-    error = errno;
-    modbus_t* aux = command && settings_.transport == "tcp" ? open_context() : nullptr;
-    if (command && (aux || settings_.transport == "rtu")) {
-      std::scoped_lock lock(command_mutex_, aux_mutex_);
-      command_ctx_ = command, aux_ctx_ = aux;
-      break;
-    }
-    error = errno;
+  modbus_t* command = open_context();
+  const int error = errno;
+  modbus_t* aux = command && settings_.transport == "tcp" ? open_context() : nullptr;
+  if (!command || (!aux && settings_.transport == "tcp")) {
+    const int aux_error = errno;
     if (command) modbus_close(command), modbus_free(command);
+    throw CommLost(modbus_strerror(command ? aux_error : error));
   }
-  if (!command_ctx_)
-    throw CommLost("cannot reach the Modbus machine at " + where + " after " + std::to_string(settings_.connect_attempts) +
-                   " attempts: " + modbus_strerror(error));
+  {
+    std::scoped_lock lock(command_mutex_, aux_mutex_);
+    command_ctx_ = command, aux_ctx_ = aux;
+  }
   {
     std::lock_guard lock(down_mutex_);
     down_.reset();
   }
-  lifecycle_ = Lifecycle::connected;
-  try {
-    const auto version = read(command_link(), mb::address("protocol_version"), 1, "connect");
-    if (version[0] != mb::kProtocolVersion)
-      throw Protocol("the machine at " + where + " speaks register map version " + std::to_string(version[0]) +
-                     ", this driver version " + std::to_string(mb::kProtocolVersion));
-    info();  // the tip table
-    // A command from before the link dropped may still be running: its outcome is unknown, so it is
-    // stopped, never replayed, and its echo is awaited so that the next number cannot collide with it.
-    if (read(command_link(), mb::address("flags"), 1, "connect")[0] & mb::busy) {
-      write_single(command_link(), mb::address("urgent"), mb::Urgent::stop, "connect");
-      const auto deadline = Clock::now() + std::chrono::duration<double>(settings_.motion_timeout_s);
-      while (read(command_link(), mb::address("flags"), 1, "connect")[0] & mb::busy) {
-        if (Clock::now() > deadline) throw Timeout("connect: the machine's last command does not stop");
-        std::this_thread::sleep_for(std::chrono::duration<double>(std::max(settings_.poll_interval_s, 1e-3)));
-      }
+  const auto version = read(command_link(), mb::address("protocol_version"), 1, "connect");
+  if (version[0] != mb::kProtocolVersion)
+    throw Protocol(where() + " speaks register map version " + std::to_string(version[0]) + ", this driver version " +
+                   std::to_string(mb::kProtocolVersion));
+  read_info();  // the tip table
+  // A command from before the link dropped may still be running: its outcome is unknown, so it is
+  // stopped, never replayed, and its echo is awaited so that the next number cannot collide with it.
+  if (read(command_link(), mb::address("flags"), 1, "connect")[0] & mb::busy) {
+    write_single(command_link(), mb::address("urgent"), mb::Urgent::stop, "connect");
+    const auto deadline = Clock::now() + std::chrono::duration<double>(settings_.motion_timeout_s);
+    while (read(command_link(), mb::address("flags"), 1, "connect")[0] & mb::busy) {
+      if (Clock::now() > deadline) throw Timeout("connect: the machine's last command does not stop");
+      std::this_thread::sleep_for(std::chrono::duration<double>(std::max(settings_.poll_interval_s, 1e-3)));
     }
-    seq_ = read(command_link(), mb::address("done_seq"), 1, "connect")[0];
-    if (settings_.heartbeat_s > 0) {
-      write_single(command_link(), mb::address("heartbeat_timeout"),
-                   static_cast<std::uint16_t>(std::lround(settings_.heartbeat_timeout_s * 1000)), "connect");
-      heartbeat_stop_ = false;
-      heartbeat_ = std::thread([this] { heartbeat_loop(); });
-    }
-  } catch (...) {
-    lifecycle_ = Lifecycle::configured;
-    close_contexts();
-    throw;
   }
-}
-
-void ModbusCmm::enable() {
-  require(Lifecycle::connected, "enable");
-  lifecycle_ = Lifecycle::enabled;
-}
-
-void ModbusCmm::disable() {
-  if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+  seq_ = read(command_link(), mb::address("done_seq"), 1, "connect")[0];
+  if (settings_.heartbeat_s > 0) {
+    write_single(command_link(), mb::address("heartbeat_timeout"),
+                 static_cast<std::uint16_t>(std::lround(settings_.heartbeat_timeout_s * 1000)), "connect");
+    heartbeat_stop_ = false;
+    heartbeat_ = std::thread([this] { heartbeat_loop(); });
+  }
 }
 
 void ModbusCmm::stop_heartbeat() {
@@ -156,8 +135,7 @@ void ModbusCmm::stop_heartbeat() {
   if (heartbeat_.joinable()) heartbeat_.join();
 }
 
-void ModbusCmm::disconnect() {
-  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;  // before the contexts go
+void ModbusCmm::on_disconnect() {
   stop_heartbeat();
   close_contexts();
   std::lock_guard lock(down_mutex_);
@@ -174,7 +152,7 @@ void ModbusCmm::heartbeat_loop() {
     } catch (const std::exception&) {
       // A missed beat is the point of a heartbeat: the machine notices; the next call reports the
       // link, which a beat left unanswered has dropped. Nothing beats on a dropped link.
-      if (lifecycle_ < Lifecycle::connected) return;
+      if (!link_up()) return;
     }
     lock.lock();
   }
@@ -215,7 +193,7 @@ void ModbusCmm::request_failed(modbus_t*& ctx, const char* what, int error) {
     std::lock_guard lock(down_mutex_);
     if (!down_) down_.emplace(kind, why);
   }
-  if (lifecycle_ >= Lifecycle::connected) lifecycle_ = Lifecycle::configured;
+  drop_link();
   throw_fault(kind, why + "; the link is closed until connect()");
 }
 
@@ -231,7 +209,7 @@ template <class Request>
 void ModbusCmm::exchange(Link link, const char* what, Request&& request, bool even_if_down) {
   std::lock_guard lock(*link.mutex);
   modbus_t*& ctx = *link.ctx;
-  if (!ctx || (!even_if_down && lifecycle_ < Lifecycle::connected)) link_is_down(what);
+  if (!ctx || (!even_if_down && !link_up())) link_is_down(what);
   if (request(ctx)) return;
   request_failed(ctx, what, errno);
 }
@@ -247,7 +225,6 @@ void ModbusCmm::write_single(Link link, int address, std::uint16_t value, const 
 }
 
 std::vector<std::uint16_t> ModbusCmm::run_command(std::vector<std::uint16_t> block, const char* what, bool motion) {
-  require(motion ? Lifecycle::enabled : Lifecycle::connected, what);
   bool echoed_fault = false;  // the machine finished the command with a fault: it is not running
   try {
     seq_ = static_cast<std::uint16_t>(seq_ % 65535 + 1);
@@ -272,8 +249,7 @@ std::vector<std::uint16_t> ModbusCmm::run_command(std::vector<std::uint16_t> blo
       }
       if (settings_.poll_interval_s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(settings_.poll_interval_s));
     }
-  } catch (const Fault& fault) {
-    if (motion && lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
+  } catch (const Fault&) {
     // A fault of the link, not of the machine: the command may be running unwatched. Stop it if any
     // context still reaches it, even with the link dropped (the heartbeat stops it otherwise).
     if (motion && !echoed_fault) try {
@@ -303,37 +279,31 @@ Vec3 get_vec(const std::uint16_t* regs) {
 
 MachineStatus ModbusCmm::decode_status(const std::vector<std::uint16_t>& r) const {
   std::lock_guard lock(tips_mutex_);
-  MachineStatus s = mb::decode_status(r, tip_ids_);
-  s.lifecycle = lifecycle_;
-  return s;
+  return mb::decode_status(r, tip_ids_);
 }
 
-MachineStatus ModbusCmm::status() {
-  require(Lifecycle::connected, "status");
+MachineStatus ModbusCmm::read_status() {
   auto regs = read(aux_link(), mb::kStatusFirst, mb::kStatusCount, "status");
   MachineStatus s = decode_status(regs);
   if (s.fault) s.fault_message = mb::get_ascii(read(aux_link(), mb::address("fault_text"), 64, "status").data(), 64);
   return s;
 }
 
-MachineInfo ModbusCmm::info() {
-  require(Lifecycle::connected, "info");
+description::MachineDescription ModbusCmm::read_info() {
   auto r = read(aux_link(), mb::kInfoFirst, mb::kInfoCount, "info");
   auto at = [&](std::uint16_t address) { return &r[static_cast<std::size_t>(address - mb::kInfoFirst)]; };
-  MachineInfo info;
-  info.driver = "modbus";
-  info.description = "Modbus machine at " +
-                     (settings_.transport == "rtu" ? settings_.device : settings_.host + ":" + std::to_string(settings_.port));
-  info.travel_box = TravelBox{get_vec(at(mb::address("box_min_x"))), get_vec(at(mb::address("box_max_x")))};
+  description::MachineDescription info;
+  info.name = "Modbus machine at " + endpoint();
+  info.travel_box = {get_vec(at(mb::address("box_min_x"))), get_vec(at(mb::address("box_max_x")))};
   info.max_speed_mm_s = mb::get_u32(at(mb::address("max_speed"))) * 1e-3;
   info.max_accel_mm_s2 = mb::get_u32(at(mb::address("max_accel"))) * 1e-3;
   info.probe_speed_mm_s = mb::get_u32(at(mb::address("probe_speed"))) * 1e-3;
-  info.reference_sphere = ReferenceSphereInfo{get_vec(at(mb::address("sphere_x"))), mb::get_u32(at(mb::address("sphere_radius"))) * 1e-6};
+  info.reference_sphere = {get_vec(at(mb::address("sphere_x"))), mb::get_u32(at(mb::address("sphere_radius"))) * 1e-6};
   const int tips = std::min<int>(*at(mb::address("tip_count")), mb::kMaxTips);
   std::vector<std::string> ids;
   for (int i = 0; i < tips; ++i) {
     auto t = read(aux_link(), mb::address("tip_id") + i * mb::kTipStride, mb::kTipEntryCount, "info");
-    const TipInfo tip = mb::decode_tip(t);
+    const description::StylusTip tip = mb::decode_tip(t);
     ids.push_back(tip.id);
     info.tips.push_back(tip);
   }
@@ -346,16 +316,16 @@ MachineInfo ModbusCmm::info() {
   return info;
 }
 
-void ModbusCmm::home() { run_command(empty_block(mb::Opcode::home), "home", true); }
+void ModbusCmm::do_home() { run_command(empty_block(mb::Opcode::home), "home", true); }
 
-void ModbusCmm::move(const Move& move) {
+void ModbusCmm::do_move(const Move& move) {
   auto block = empty_block(mb::Opcode::move);
   put_vec(field(block, mb::address("x")), move.target, 1e-6);
   mb::put_u32(field(block, mb::address("speed")), mb::to_unsigned(move.speed_mm_s, 1e-3));
   run_command(block, "move", true);
 }
 
-TouchResult ModbusCmm::probe(const ProbeMove& move) {
+TouchResult ModbusCmm::do_probe(const ProbeMove& move) {
   auto block = empty_block(mb::Opcode::probe);
   put_vec(field(block, mb::address("x")), move.start, 1e-6);
   put_vec(field(block, mb::address("dir_x")), move.direction.normalized(), 1e-9);
@@ -369,18 +339,17 @@ TouchResult ModbusCmm::probe(const ProbeMove& move) {
   return mb::decode_touch(r, tip_ids_);
 }
 
-void ModbusCmm::stop() {
-  if (lifecycle_ < Lifecycle::connected) return;
+void ModbusCmm::do_stop() {
+  if (!link_up()) return;
   write_single(aux_link(), mb::address("urgent"), mb::Urgent::stop, "stop");
 }
 
-void ModbusCmm::abort() {
-  if (lifecycle_ == Lifecycle::enabled) lifecycle_ = Lifecycle::connected;
-  if (lifecycle_ < Lifecycle::connected) return;
+void ModbusCmm::do_abort() {
+  if (!link_up()) return;
   write_single(aux_link(), mb::address("urgent"), mb::Urgent::abort, "abort");
 }
 
-void ModbusCmm::reset() { run_command(empty_block(mb::Opcode::reset), "reset", false); }
+void ModbusCmm::do_reset() { run_command(empty_block(mb::Opcode::reset), "reset", false); }
 
 int ModbusCmm::tip_index(const std::string& id) {
   std::lock_guard lock(tips_mutex_);
@@ -389,13 +358,13 @@ int ModbusCmm::tip_index(const std::string& id) {
   throw std::invalid_argument("no tip \"" + id + "\" on the Modbus machine");
 }
 
-void ModbusCmm::select_tip(const std::string& tip_id) {
+void ModbusCmm::do_select_tip(const std::string& tip_id) {
   auto block = empty_block(mb::Opcode::select_tip);
   *field(block, mb::address("tip")) = static_cast<std::uint16_t>(tip_index(tip_id));
   run_command(block, "select_tip", false);
 }
 
-void ModbusCmm::record_qualification(const std::string& tip_id, const TipQualification& q) {
+void ModbusCmm::do_record_qualification(const std::string& tip_id, const description::TipQualification& q) {
   auto block = empty_block(mb::Opcode::set_tip);
   *field(block, mb::address("tip")) = static_cast<std::uint16_t>(tip_index(tip_id));
   put_vec(field(block, mb::address("x")), q.offset, 1e-6);

@@ -14,7 +14,7 @@
 
 #include <modbus/modbus.h>
 
-#include "hal/cmm.hpp"
+#include "hal/cmm_driver.hpp"
 #include "hal/fault.hpp"
 
 namespace cmm::hal {
@@ -36,7 +36,7 @@ struct ModbusSettings {
   double connect_backoff_s = 0.05;  // doubled after each failed attempt
 };
 
-ModbusSettings modbus_settings_from_json(const nlohmann::json& block);  // throws ConfigError
+ModbusSettings modbus_settings_from_json(const nlohmann::json& block);  // throws description::FieldError
 
 // Threads: the motion calls use one context; status(), stop() and abort() use a second one (TCP)
 // so they answer while a motion runs. On RTU there is one line and one context, shared under a
@@ -46,26 +46,27 @@ ModbusSettings modbus_settings_from_json(const nlohmann::json& block);  // throw
 // another request (Protocol) shows that one already was: either way the context is out of step, so
 // the driver closes the link and drops to configured, as for CommLost; connect() opens it afresh and
 // re-reads the machine.
-class ModbusCmm : public Cmm {
+class ModbusCmm : public CmmDriver {
  public:
-  ModbusCmm() = default;
+  ModbusCmm();
   ~ModbusCmm() override;
 
-  void configure(const nlohmann::json& block) override;
-  void connect() override;
-  void enable() override;
-  void disable() override;
-  void disconnect() override;
-  MachineInfo info() override;
-  MachineStatus status() override;
-  void home() override;
-  void move(const Move& move) override;
-  TouchResult probe(const ProbeMove& move) override;
-  void stop() override;
-  void abort() override;
-  void reset() override;
-  void select_tip(const std::string& tip_id) override;
-  void record_qualification(const std::string& tip_id, const TipQualification& q) override;
+ protected:
+  ConnectPolicy connect_policy() const override;
+  std::string where() const override;
+  void on_configure(const nlohmann::json& block) override;
+  void on_connect() override;
+  void on_disconnect() override;
+  description::MachineDescription read_info() override;
+  MachineStatus read_status() override;
+  void do_home() override;
+  void do_move(const Move& move) override;
+  TouchResult do_probe(const ProbeMove& move) override;
+  void do_stop() override;
+  void do_abort() override;
+  void do_reset() override;
+  void do_select_tip(const std::string& tip_id) override;
+  void do_record_qualification(const std::string& tip_id, const description::TipQualification& q) override;
 
  private:
   // A context and its lock; the context is read only under the lock, so a disconnect on another
@@ -74,9 +75,9 @@ class ModbusCmm : public Cmm {
     modbus_t** ctx = nullptr;
     std::mutex* mutex = nullptr;
   };
+  std::string endpoint() const;  // host:port, or the serial device
   modbus_t* open_context() const;
   void close_contexts();
-  void require(Lifecycle at_least, const char* what) const;
   // One request on `link` under its lock: `request(ctx)` is true when it got its answer. With
   // `even_if_down` it is sent on a context still open after the link was dropped (the last stop).
   template <class Request>
@@ -97,7 +98,6 @@ class ModbusCmm : public Cmm {
   Link aux_link() { return settings_.transport == "rtu" ? command_link() : Link{&aux_ctx_, &aux_mutex_}; }
 
   ModbusSettings settings_;
-  std::atomic<Lifecycle> lifecycle_{Lifecycle::unconfigured};
   modbus_t* command_ctx_ = nullptr;
   modbus_t* aux_ctx_ = nullptr;  // null on RTU
   std::mutex command_mutex_, aux_mutex_;

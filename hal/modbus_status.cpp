@@ -52,15 +52,15 @@ TouchResult decode_touch(std::span<const std::uint16_t> r, const std::vector<std
   return t;
 }
 
-TipInfo decode_tip(std::span<const std::uint16_t> entry) {
+description::StylusTip decode_tip(std::span<const std::uint16_t> entry) {
   require_registers(entry, kTipEntryCount, "tip table entry");
   const std::uint16_t first = address("tip_id");
-  TipInfo tip;
+  description::StylusTip tip;
   tip.id = get_ascii(at(entry, first, address("tip_id")), modbus::entry("tip_id").count);
   tip.ball_radius_mm = get_u32(at(entry, first, address("tip_radius"))) * 1e-6;
   tip.offset = get_vec(at(entry, first, address("tip_offset_x")));
   if (const std::uint32_t when = get_u32(at(entry, first, address("tip_qualified")))) {
-    TipQualification q;
+    description::TipQualification q;
     q.ball_radius_mm = tip.ball_radius_mm;
     q.offset = tip.offset;
     q.residual_rms_mm = get_u32(at(entry, first, address("tip_residual"))) * 1e-6;

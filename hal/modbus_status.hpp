@@ -8,7 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "hal/machine_info.hpp"
+#include "hal/description/machine_description.hpp"
+#include "hal/machine_status.hpp"
 #include "hal/modbus_map.hpp"
 #include "hal/motion.hpp"
 
@@ -23,6 +24,6 @@ TouchResult decode_touch(std::span<const std::uint16_t> status, const std::vecto
 // One entry of the tip table, kTipEntryCount registers from its tip_id (entries are kTipStride
 // apart); throws Protocol when short.
 inline constexpr std::uint16_t kTipEntryCount = address("tip_touches") + 1 - address("tip_id");
-TipInfo decode_tip(std::span<const std::uint16_t> entry);
+description::StylusTip decode_tip(std::span<const std::uint16_t> entry);
 
 }  // namespace cmm::hal::modbus

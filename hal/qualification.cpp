@@ -10,23 +10,17 @@
 
 namespace cmm::hal {
 
-namespace {
-const TipInfo& find_tip(const MachineInfo& info, const std::string& id) {
-  for (const auto& tip : info.tips)
-    if (tip.id == id) return tip;
-  throw std::invalid_argument("qualify: no tip \"" + id + "\" on this machine");
-}
-}  // namespace
-
-TipQualification qualify(Cmm& cmm, const std::string& tip_id, const QualificationOptions& options) {
+description::TipQualification qualify(Cmm& cmm, const std::string& tip_id, const QualificationOptions& options) {
   if (options.touches < 5) throw std::invalid_argument("qualify: needs at least 5 touches");
   if (!(options.ring_latitude_deg > 0 && options.ring_latitude_deg < 80))
     throw std::invalid_argument("qualify: ring_latitude_deg must be in (0, 80)");
   if (!(options.search_mm > 0)) throw std::invalid_argument("qualify: search_mm must be > 0");
 
   cmm.select_tip(tip_id);
-  MachineInfo info = cmm.info();
-  const TipInfo& tip = find_tip(info, tip_id);
+  const description::MachineDescription info = cmm.info();
+  const description::StylusTip* found = info.find_tip(tip_id);
+  if (!found) throw std::invalid_argument("qualify: no tip \"" + tip_id + "\" on this machine");
+  const description::StylusTip& tip = *found;
   const Vec3 centre = info.reference_sphere.centre;
   const double reach = info.reference_sphere.radius_mm + tip.ball_radius_mm;  // nominal centre-sphere radius
   const double speed = options.speed_mm_s > 0 ? options.speed_mm_s : info.probe_speed_mm_s;
@@ -69,7 +63,7 @@ TipQualification qualify(Cmm& cmm, const std::string& tip_id, const Qualificatio
   if (options.before_motion) options.before_motion();  // a stop that came too late to stop the last motion
 
   SphereFit fit = fit_sphere(centres);
-  TipQualification q;
+  description::TipQualification q;
   q.ball_radius_mm = fit.radius - info.reference_sphere.radius_mm;
   q.offset = tip.offset + (centre - fit.centre);
   q.residual_rms_mm = fit.residual_rms;

@@ -24,6 +24,6 @@ struct QualificationOptions {
 // less the sphere's; the offset is the current offset corrected by how far the fitted centre lies
 // from the sphere's known centre. Throws std::invalid_argument for bad options and hal::Fault for
 // what the machine reports (a miss means the sphere is not where the description says).
-TipQualification qualify(Cmm& cmm, const std::string& tip_id, const QualificationOptions& options = {});
+description::TipQualification qualify(Cmm& cmm, const std::string& tip_id, const QualificationOptions& options = {});
 
 }  // namespace cmm::hal

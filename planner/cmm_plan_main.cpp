@@ -2,28 +2,27 @@
 // and holes, registers S to M, plans windows, touches and the ordered move program, writes the plan
 // JSON (and DMIS) and prints a summary an operator can read at a glance.
 #include <CLI/CLI.hpp>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
 
+#include "geometry/atomic_file.hpp"
 #include "geometry/feature_model.hpp"
 #include "geometry/file_error.hpp"
 #include "geometry/mesh_io.hpp"
 #include "planner/dmis_export.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/json_fields.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/measurement_plan.hpp"
 #include "planner/model_limits.hpp"
 #include "planner/plan_json.hpp"
-#include "planner/plate.hpp"
+#include "hal/description/plate.hpp"
 #include "planner/registration.hpp"
 
 namespace {
@@ -57,32 +56,32 @@ std::string format_mm(double value) {
 // The ball the plan is for: the active tip's qualified radius unless --probe-radius says otherwise.
 // Another tip of that radius becomes the active one; a radius no tip has is planned for a copy of
 // the active tip, with a note, so that the plan, the DMIS and the machine description agree.
-void choose_tip(planner::MachineDescription& machine, Options& o) {
+void choose_tip(description::MachineDescription& machine, Options& o) {
   if (!o.radius_given) {
     o.inputs.probe_radius = machine.tip().ball_radius_mm;
     return;
   }
   const double r = o.inputs.probe_radius;
-  for (const planner::StylusTip& tip : machine.tips)
+  for (const description::StylusTip& tip : machine.tips)
     if (std::abs(tip.ball_radius_mm - r) <= 1e-9) {
       if (tip.id != machine.active_tip)
         o.inputs.notes.push_back("tip " + tip.id + " made active: it is the one of radius " + format_mm(r) + " mm");
       machine.active_tip = tip.id;
       return;
     }
-  planner::StylusTip tip = machine.tip();
+  description::StylusTip tip = machine.tip();
   o.inputs.notes.push_back("no tip of the machine has radius " + format_mm(r) + " mm: planned for tip " + tip.id +
                            " with its ball changed to that radius; qualify such a tip before running the plan");
   tip.id += "_r" + format_mm(r);
   tip.ball_radius_mm = r;
-  if (const std::string why = planner::tip_problem(tip); !why.empty())
+  if (const std::string why = description::tip_problem(tip); !why.empty())
     throw std::invalid_argument("--probe-radius " + format_mm(r) + ": no tip has that radius, and tip " +
                                 machine.tip().id + " with its ball changed to it is unusable (" + why + ")");
   machine.tips.push_back(tip);
   machine.active_tip = tip.id;
 }
 
-geometry::TriangleMesh read_mesh(const std::string& path, const planner::MachineDescription& machine,
+geometry::TriangleMesh read_mesh(const std::string& path, const description::MachineDescription& machine,
                                  planner::PlanInputs& inputs) {
   geometry::ReadResult read = geometry::read_model(path);
   if (const auto* cloud = std::get_if<geometry::PointCloud>(&read.model))
@@ -111,26 +110,16 @@ struct WriteError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Written beside the target and renamed over it, so a failed write never leaves half a file.
-void write_atomically(const std::string& path, const std::string& text) {
-  const std::string partial = path + ".partial";
-  errno = 0;
-  std::ofstream out(partial);
-  out << text;
-  out.close();
-  const int write_errno = errno;
-  std::error_code renamed;
-  if (out) std::filesystem::rename(partial, path, renamed);
-  if (!out || renamed) {
-    std::error_code ignored;
-    std::filesystem::remove(partial, ignored);
-    const std::string why = renamed ? renamed.message() : write_errno ? std::strerror(write_errno) : "the write failed";
-    throw WriteError("cannot write " + path + ": " + why);
+void write_output(const std::string& path, const std::string& text) {
+  try {
+    geometry::write_atomically(path, text);
+  } catch (const geometry::FileError& e) {
+    throw WriteError(std::string("cannot write ") + e.what());
   }
 }
 
 void print_summary(const Options& o, const StageTimes& times, const geometry::FeatureModel& model, const geometry::ReadReport& read,
-                   const planner::MeasurementPlan& plan, const planner::MachineDescription& machine,
+                   const planner::MeasurementPlan& plan, const description::MachineDescription& machine,
                    const std::optional<planner::RegistrationResult>& registration) {
   const auto& t = model.topology;
   const auto& in = o.inputs;
@@ -186,8 +175,8 @@ void print_summary(const Options& o, const StageTimes& times, const geometry::Fe
 int plan(Options o) {
   planner::PlanInputs& inputs = o.inputs;
   StageTimes times;
-  planner::MachineDescription machine =
-      o.machine.empty() ? planner::default_machine() : planner::read_machine(o.machine);
+  description::MachineDescription machine =
+      o.machine.empty() ? description::default_machine() : description::read_machine(o.machine);
   if (o.machine.empty()) inputs.notes.push_back("no --machine given: the default machine description (config/machine.json)");
   choose_tip(machine, o);
   const geometry::TriangleMesh mesh = read_mesh(o.model, machine, inputs);
@@ -197,8 +186,8 @@ int plan(Options o) {
   Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
   if (!o.registration.empty()) {
     const planner::RegistrationInput corners = planner::read_registration(o.registration);
-    std::optional<planner::Plate> plate;
-    if (!o.plate.empty()) plate = planner::read_plate(o.plate);
+    std::optional<description::Plate> plate;
+    if (!o.plate.empty()) plate = description::read_plate(o.plate);
     registration = planner::fit_registration(corners, plate ? &*plate : nullptr);
     T_M_S = registration->T_M_S;
   } else {
@@ -225,8 +214,8 @@ int plan(Options o) {
   if (!o.dmis.empty())
     planner::write_dmis(dmis, plan.program, machine, planner::dmis_features(plan.program, model.holes),
                         {"cmm-plan", std::filesystem::path(o.model).stem().string()});
-  write_atomically(o.output, plan_text);
-  if (!o.dmis.empty()) write_atomically(o.dmis, dmis.str());
+  write_output(o.output, plan_text);
+  if (!o.dmis.empty()) write_output(o.dmis, dmis.str());
   times.done("write");
   print_summary(o, times, model, inputs.read_report, plan, machine, registration);
   return 0;
@@ -267,6 +256,9 @@ int main(int argc, char** argv) {
   try {
     return plan(o);
   } catch (const geometry::FileError& error) {
+    std::cerr << "cmm-plan: " << error.what() << '\n';
+    return 2;
+  } catch (const description::FieldError& error) {
     std::cerr << "cmm-plan: " << error.what() << '\n';
     return 2;
   } catch (const planner::RegistrationError& error) {

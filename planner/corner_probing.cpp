@@ -32,8 +32,8 @@ std::pair<double, double> contact_depths(double height, double ball_radius, doub
 }
 
 // Signed distance of a top-face point from the side id → next(id), positive inside the plate.
-double inside_distance(const Plate& plate, int id, const Vec3& p) {
-  return -side_normal(plate, id).dot(p - plate.corner(id));
+double inside_distance(const description::Plate& plate, int id, const Vec3& p) {
+  return -description::side_normal(plate, id).dot(p - plate.corner(id));
 }
 
 struct PlannedContact {
@@ -109,14 +109,14 @@ const char* face_name(int face) {
 
 }  // namespace
 
-std::vector<Touch> plan_corner_touches(const Plate& plate, const Eigen::Isometry3d& T_M_P,
+std::vector<Touch> plan_corner_touches(const description::Plate& plate, const Eigen::Isometry3d& T_M_P,
                                        const CornerProbingOptions& options, int first_id) {
   const double r = options.ball_radius_mm, m = options.edge_margin_mm, s = options.spread_mm;
   const double t = plate.thickness_mm;
   const Vec3 up = Vec3::UnitZ();
   const auto [upper, lower] = contact_depths(t, r, m, "the plate");
   TouchWriter writer(T_M_P, options, first_id);
-  const bool chamfered = plate.fiducial.kind == PlateFiducial::Kind::chamfer;
+  const bool chamfered = plate.fiducial.kind == description::PlateFiducial::Kind::chamfer;
 
   for (int k = 1; k <= plate.corner_count(); ++k) {
     const Vec3& c = plate.corner(k);
@@ -143,7 +143,7 @@ std::vector<Touch> plan_corner_touches(const Plate& plate, const Eigen::Isometry
     for (int face : {1, 2}) {
       const Vec3 u = face == 1 ? u1 : u2;
       const int other = face == 1 ? plate.next(k) : plate.previous(k);
-      const Vec3 outward = side_normal(plate, face == 1 ? k : plate.previous(k));
+      const Vec3 outward = description::side_normal(plate, face == 1 ? k : plate.previous(k));
       const double length = (plate.corner(other) - c).norm();
       const double e0 = m + cut;
       if (e0 + s > length - cut - m)
@@ -156,7 +156,7 @@ std::vector<Touch> plan_corner_touches(const Plate& plate, const Eigen::Isometry
     }
   }
 
-  const FiducialGeometry g = fiducial_geometry(plate);
+  const description::FiducialGeometry g = description::fiducial_geometry(plate);
   if (chamfered) {
     const int k = plate.fiducial.corner;
     const double q = g.half_width_mm - m;
@@ -226,17 +226,17 @@ Vec3 corner_from_touches(int corner, std::span<const Touch> touches, std::span<c
   return fit_corner(corner, touches, ball_centres, options).position;
 }
 
-std::vector<CornerFit> fit_corners(const Plate& plate, std::span<const Touch> touches,
+std::vector<CornerFit> fit_corners(const description::Plate& plate, std::span<const Touch> touches,
                                    std::span<const Vec3> ball_centres, const CornerProbingOptions& options) {
   std::vector<CornerFit> fits;
   for (int k = 1; k <= plate.corner_count(); ++k) fits.push_back(fit_corner(k, touches, ball_centres, options));
   return fits;
 }
 
-FiducialFit locate_fiducial(const Plate& plate, const Eigen::Isometry3d& T_M_P, std::span<const Touch> touches,
+FiducialFit locate_fiducial(const description::Plate& plate, const Eigen::Isometry3d& T_M_P, std::span<const Touch> touches,
                             std::span<const Vec3> ball_centres, const CornerProbingOptions& options) {
   const Group g = collect(touches, ball_centres, TouchTarget::fiducial, 0, -1);
-  const bool chamfer = plate.fiducial.kind == PlateFiducial::Kind::chamfer;
+  const bool chamfer = plate.fiducial.kind == description::PlateFiducial::Kind::chamfer;
   const std::size_t needed = 3;  // a hole is planned with four; three still fix a circle
   if (g.centres.size() < needed)
     refuse({}, "the fiducial: " + std::to_string(g.centres.size()) + " touches, needs at least " +

@@ -9,7 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "planner/plane_fit.hpp"
-#include "planner/plate.hpp"
+#include "hal/description/plate.hpp"
 #include "planner/touch.hpp"
 
 namespace cmm::planner {
@@ -45,7 +45,7 @@ struct CornerProbingOptions {
 // ball moving along the face's normal meets the face at that point.
 // Throws RegistrationError (kind probing) when the plate is too thin, the chamfer too narrow or the
 // hole too small for the ball and the margins.
-std::vector<Touch> plan_corner_touches(const Plate& plate, const Eigen::Isometry3d& T_M_P,
+std::vector<Touch> plan_corner_touches(const description::Plate& plate, const Eigen::Isometry3d& T_M_P,
                                        const CornerProbingOptions& options, int first_id = 0);
 
 // One corner from its nine touches. Each face's ball centres lie on the face's plane moved out by
@@ -69,7 +69,7 @@ CornerFit fit_corner(int corner, std::span<const Touch> touches, std::span<const
 Vec3 corner_from_touches(int corner, std::span<const Touch> touches, std::span<const Vec3> ball_centres,
                          const CornerProbingOptions& options);
 // Every corner of the plate, in id order.
-std::vector<CornerFit> fit_corners(const Plate& plate, std::span<const Touch> touches,
+std::vector<CornerFit> fit_corners(const description::Plate& plate, std::span<const Touch> touches,
                                    std::span<const Vec3> ball_centres, const CornerProbingOptions& options);
 
 // The fiducial from its touches: a chamfer gives a point on its face (the centres' centroid moved in
@@ -81,7 +81,7 @@ struct FiducialFit {
   double diameter_mm = 0;     // hole only
   double rms_mm = 0;          // centres about the fitted plane (chamfer) or circle (hole)
 };
-FiducialFit locate_fiducial(const Plate& plate, const Eigen::Isometry3d& T_M_P, std::span<const Touch> touches,
+FiducialFit locate_fiducial(const description::Plate& plate, const Eigen::Isometry3d& T_M_P, std::span<const Touch> touches,
                             std::span<const Vec3> ball_centres, const CornerProbingOptions& options);
 
 }  // namespace cmm::planner

@@ -2,15 +2,10 @@
 // program; the text is built whole first so that a refused program writes nothing.
 #include "planner/dmis_export.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <Eigen/Dense>
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <map>
 #include <ostream>
 #include <set>
@@ -19,6 +14,7 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "geometry/atomic_file.hpp"
 #include "geometry/file_error.hpp"
 
 namespace cmm::planner {
@@ -77,8 +73,8 @@ std::string sensor_label(const std::string& tip_id) {
   return label.substr(0, max_label_length);
 }
 
-const StylusTip& active_tip(const MachineDescription& machine) {
-  for (const StylusTip& tip : machine.tips)
+const description::StylusTip& active_tip(const description::MachineDescription& machine) {
+  for (const description::StylusTip& tip : machine.tips)
     if (tip.id == machine.active_tip) return tip;
   refuse("the machine has no tip '" + machine.active_tip + "' (its active_tip)");
 }
@@ -300,9 +296,9 @@ std::vector<DmisFeature> dmis_features(const MoveProgram& program, const std::ve
   return features;
 }
 
-void write_dmis(std::ostream& out, const MoveProgram& program, const MachineDescription& machine,
+void write_dmis(std::ostream& out, const MoveProgram& program, const description::MachineDescription& machine,
                 const std::vector<DmisFeature>& features, const DmisOptions& options) {
-  const StylusTip& tip = active_tip(machine);
+  const description::StylusTip& tip = active_tip(machine);
   const double r = tip.ball_radius_mm;
   if (!(r > 0 && std::isfinite(r))) refuse("the active tip's ball radius is not positive");
   if (std::abs(tip.direction.norm() - 1) > unit_tolerance) refuse("the active tip's direction is not a unit vector");
@@ -381,46 +377,11 @@ void write_dmis(std::ostream& out, const MoveProgram& program, const MachineDesc
 }
 
 void write_dmis_file(const std::filesystem::path& file, const MoveProgram& program,
-                     const MachineDescription& machine, const std::vector<DmisFeature>& features,
+                     const description::MachineDescription& machine, const std::vector<DmisFeature>& features,
                      const DmisOptions& options) {
   std::ostringstream text;
   write_dmis(text, program, machine, features, options);
-  const std::string data = text.str();
-  const std::filesystem::path partial = file.string() + ".partial";
-  const auto fail = [&](const std::string& what) {
-    const std::string reason = what + ": " + std::strerror(errno);
-    std::error_code ignored;
-    std::filesystem::remove(partial, ignored);
-    throw geometry::FileError::whole(file, "cannot write the DMIS program (" + reason + ")");
-  };
-  const int fd = ::open(partial.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) fail("open " + partial.string());
-  for (std::size_t done = 0; done < data.size();) {
-    const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int saved = errno;
-      ::close(fd);
-      errno = saved;
-      fail("write");
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  // On disk before the rename, so a crash leaves the old file or the whole new one.
-  if (::fsync(fd) != 0) {
-    const int saved = errno;
-    ::close(fd);
-    errno = saved;
-    fail("fsync");
-  }
-  if (::close(fd) != 0) fail("close");
-  if (std::rename(partial.c_str(), file.c_str()) != 0) fail("rename");
-  const std::filesystem::path folder = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
-  const int dir = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir >= 0) {  // the rename itself made durable; a folder we cannot open still has the file
-    ::fsync(dir);
-    ::close(dir);
-  }
+  geometry::write_atomically(file, text.str());
 }
 
 }  // namespace cmm::planner

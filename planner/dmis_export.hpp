@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "geometry/hole.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/move_program.hpp"
 
 namespace cmm::planner {
@@ -44,13 +44,13 @@ std::vector<DmisFeature> dmis_features(const MoveProgram& program, const std::ve
 // with its PTMEAS: unit direction, nominal centre = surface point − r·direction for the active tip's
 // radius r, start on that line behind the contact. Anything else throws std::invalid_argument naming
 // the touch or feature, before a byte is written.
-void write_dmis(std::ostream& out, const MoveProgram& program, const MachineDescription& machine,
+void write_dmis(std::ostream& out, const MoveProgram& program, const description::MachineDescription& machine,
                 const std::vector<DmisFeature>& features, const DmisOptions& options = {});
 
-// The same, to `file`: written to `file`.partial, flushed to disk and renamed over `file`, so a
-// failed export never leaves half a program. Write errors throw geometry::FileError naming the file.
+// The same, to `file`, written atomically (geometry/atomic_file.hpp), so a failed export never
+// leaves half a program. Write errors throw geometry::FileError naming the file.
 void write_dmis_file(const std::filesystem::path& file, const MoveProgram& program,
-                     const MachineDescription& machine, const std::vector<DmisFeature>& features,
+                     const description::MachineDescription& machine, const std::vector<DmisFeature>& features,
                      const DmisOptions& options = {});
 
 }  // namespace cmm::planner

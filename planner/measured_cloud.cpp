@@ -1,21 +1,16 @@
 // geometry's write_cloud has no per-point attributes, so this writes its own small PLY: the header
-// as text, the body as one packed record per vertex, through POSIX calls so it can be fsync'ed.
+// as text, the body as one packed record per vertex, written atomically.
 #include "planner/measured_cloud.hpp"
-
-#include <fcntl.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <string>
-#include <utility>
 
-#include "geometry/file_error.hpp"
+#include "geometry/atomic_file.hpp"
 
 namespace cmm::planner {
 
@@ -35,36 +30,6 @@ void append_vertex(std::string& out, const double* xyz, unsigned char source, do
   for (int k = 0; k < 3; ++k) append_little_endian(out, xyz[k]);
   out.push_back(static_cast<char>(source));
   append_little_endian(out, static_cast<float>(uncertainty_mm));
-}
-
-// Closes on every path out, so a failed write leaks no descriptor.
-class FileDescriptor {
- public:
-  explicit FileDescriptor(int fd) : fd_(fd) {}
-  FileDescriptor(const FileDescriptor&) = delete;
-  FileDescriptor& operator=(const FileDescriptor&) = delete;
-  ~FileDescriptor() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  int get() const { return fd_; }
-  int release() { return std::exchange(fd_, -1); }
-
- private:
-  int fd_;
-};
-
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw geometry::FileError::system(path, what, errno);
-}
-
-void write_all(int fd, const std::string& bytes, const std::filesystem::path& path) {
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) fail(path, "cannot write");
-    done += static_cast<std::size_t>(n);
-  }
 }
 
 }  // namespace
@@ -105,35 +70,7 @@ void write_merged_ply(const std::filesystem::path& path, const geometry::Points&
     append_vertex(bytes, point.position.data(), merged_source_measured, point.sigma_mm);
   }
 
-  // Temp file, fsync, rename, fsync of the folder (DESIGN.md "Files"): after a crash either the old
-  // file or the whole new one is there.
-  std::filesystem::path partial = path;
-  partial += ".partial";
-  {
-    FileDescriptor fd(::open(partial.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
-    if (fd.get() < 0) fail(partial, "cannot create");
-    try {
-      write_all(fd.get(), bytes, partial);
-      if (::fsync(fd.get()) != 0) fail(partial, "cannot sync");
-      if (::close(fd.release()) != 0) fail(partial, "cannot close");
-    } catch (...) {
-      std::error_code ignored;
-      std::filesystem::remove(partial, ignored);
-      throw;
-    }
-  }
-  if (::rename(partial.c_str(), path.c_str()) != 0) {
-    const int error = errno;
-    std::error_code ignored;
-    std::filesystem::remove(partial, ignored);
-    errno = error;
-    fail(path, "cannot rename " + partial.filename().string() + " over it");
-  }
-  const std::filesystem::path folder = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  FileDescriptor directory(::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
-  // The file is complete and in place; a folder that cannot be synced (some file systems) only
-  // weakens the crash guarantee, so it is not an error.
-  if (directory.get() >= 0) (void)::fsync(directory.get());
+  geometry::write_atomically(path, bytes);
 }
 
 }  // namespace cmm::planner

@@ -17,8 +17,8 @@ inline constexpr unsigned char merged_source_measured = 1;
 // float uncertainty_mm (scan points: `scan_uncertainty_mm`, e.g. the scanner's 1-σ noise; measured
 // points: their sigma_mm). Scan points come first, in order, then the measured ones.
 // Everything is in the scan frame S: measured points must have been through to_scan_frame, else
-// CompensationError names the first one in M. Written to `path`.partial, synced and renamed over
-// `path`, so a reader never sees half a file; I/O failures throw geometry::FileError.
+// CompensationError names the first one in M. Written atomically (geometry/atomic_file.hpp), so a
+// reader never sees half a file; I/O failures throw geometry::FileError.
 void write_merged_ply(const std::filesystem::path& path, const geometry::Points& scan_points,
                       const std::vector<MeasuredPoint>& measured, double scan_uncertainty_mm);
 

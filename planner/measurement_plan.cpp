@@ -58,7 +58,7 @@ std::string mm(double value) { return fixed(value, 3); }
 }  // namespace
 
 MeasurementPlan plan_measurement(const geometry::FeatureModel& model, const geometry::TriangleMesh& mesh,
-                                 const Eigen::Isometry3d& T_M_S, const MachineDescription& machine,
+                                 const Eigen::Isometry3d& T_M_S, const description::MachineDescription& machine,
                                  const MeasurementPlanOptions& options) {
   MeasurementPlan plan;
   const geometry::TriangleMesh mesh_m = in_machine_frame(mesh, T_M_S);

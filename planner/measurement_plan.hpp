@@ -9,7 +9,7 @@
 
 #include "geometry/cancellation.hpp"
 #include "geometry/feature_model.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/move_program.hpp"
 #include "planner/touch_planning.hpp"
 
@@ -33,7 +33,7 @@ struct MeasurementPlanOptions {
 
 // `mesh` is the reference mesh in S, the one the model was extracted from.
 MeasurementPlan plan_measurement(const geometry::FeatureModel& model, const geometry::TriangleMesh& mesh,
-                                 const Eigen::Isometry3d& T_M_S, const MachineDescription& machine,
+                                 const Eigen::Isometry3d& T_M_S, const description::MachineDescription& machine,
                                  const MeasurementPlanOptions& options);
 
 }  // namespace cmm::planner

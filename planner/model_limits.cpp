@@ -10,6 +10,8 @@ namespace cmm::planner {
 
 namespace {
 
+using geometry::Vec3;
+
 // The vertex farthest from the per-axis median of all vertices: the median stays with the part
 // however far a few stray vertices are, so this names the stray one.
 Eigen::Index farthest_from_median(const geometry::Points& v, Vec3& median) {
@@ -26,7 +28,7 @@ Eigen::Index farthest_from_median(const geometry::Points& v, Vec3& median) {
 
 }  // namespace
 
-void check_model_limits(const geometry::TriangleMesh& mesh, const AxisBox& travel_box, const std::string& source,
+void check_model_limits(const geometry::TriangleMesh& mesh, const description::TravelBox& travel_box, const std::string& source,
                         const ModelLimits& limits) {
   const auto vertices = static_cast<std::size_t>(mesh.vertices.rows());
   const auto faces = static_cast<std::size_t>(mesh.faces.rows());

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "geometry/mesh.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 
 namespace cmm::planner {
 
@@ -28,7 +28,7 @@ struct ModelRefused : std::invalid_argument {
 // `mesh` is in mm (after any scale); `source` names it ("part.stl (scale 1)"). The frames differ
 // before registration, so sizes are compared, not positions: the model's largest extent along an
 // axis must not exceed the travel box's diagonal, the longest segment any placement can fit.
-void check_model_limits(const geometry::TriangleMesh& mesh, const AxisBox& travel_box, const std::string& source,
+void check_model_limits(const geometry::TriangleMesh& mesh, const description::TravelBox& travel_box, const std::string& source,
                         const ModelLimits& limits = {});
 
 }  // namespace cmm::planner

@@ -18,7 +18,7 @@ const char* to_string(MotionKind kind) {
   return "?";
 }
 
-MoveProgram build_program(std::vector<Touch> touches, const MachineDescription& machine, const Vec3& home,
+MoveProgram build_program(std::vector<Touch> touches, const description::MachineDescription& machine, const Vec3& home,
                           double clearance_z) {
   MoveProgram program;
   program.home = home;

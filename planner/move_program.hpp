@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/touch.hpp"
 
 namespace cmm::planner {
@@ -34,7 +34,7 @@ struct MoveProgram {
 // Orders the touches to minimise machine time and expands the motions between them. The rises,
 // descents, searches and retracts cost the same in any order; only the travel on the clearance
 // plane depends on it, so that is what is ordered and bounded.
-MoveProgram build_program(std::vector<Touch> touches, const MachineDescription& machine, const Vec3& home,
+MoveProgram build_program(std::vector<Touch> touches, const description::MachineDescription& machine, const Vec3& home,
                           double clearance_z);
 
 }  // namespace cmm::planner

@@ -4,22 +4,24 @@
 #include <cmath>
 #include <numbers>
 
+#include "hal/description/eigen_json.hpp"
+
 namespace cmm::planner {
 namespace {
 
+using description::vec3_json;
 using nlohmann::json;
 
-json vec(const geometry::Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
 double degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
 
 json window_json(const ProbeWindow& w) {
-  return {{"axis", vec(w.axis)},
+  return {{"axis", vec3_json(w.axis)},
           {"half_angle_deg", degrees(w.half_angle_rad)},
-          {"plane_normal", vec(w.plane_normal)},
+          {"plane_normal", vec3_json(w.plane_normal)},
           {"margin_deg", degrees(w.margin_rad)},
           {"margin_up_deg", degrees(w.margin_up_rad)},
           {"margin_down_deg", degrees(w.margin_down_rad)},
-          {"bisector", vec(w.bisector)},
+          {"bisector", vec3_json(w.bisector)},
           {"exact_half_angle_deg", degrees(w.exact_half_angle_rad)}};
 }
 
@@ -35,7 +37,7 @@ void add_edge_plan(json& point, const EdgePlan& plan) {
   point["reason"] = plan.reason.empty() ? json(nullptr) : json(plan.reason);
   point["window"] = plan.window ? window_json(*plan.window) : json(nullptr);
   if (plan.method == EdgeMethod::two_touch) {
-    point["approach"] = {vec(plan.touches[0].direction), vec(plan.touches[1].direction)};
+    point["approach"] = {vec3_json(plan.touches[0].direction), vec3_json(plan.touches[1].direction)};
     point["beta_deg"] = {degrees(plan.beta_rad[0]), degrees(plan.beta_rad[1])};
   }
   point["touches"] = touch_ids(plan.touches);
@@ -52,11 +54,11 @@ json to_json(const Touch& t, double clearance_z, double probe_speed_mm_s) {
   json j = {{"id", t.id},
             {"target", to_string(t.target)},
             {"face", t.face},
-            {"surface_point", vec(t.surface_point)},
-            {"direction", vec(t.direction)},
-            {"nominal_centre", vec(t.nominal_centre)},
-            {"above", vec(geometry::Vec3(t.start.x(), t.start.y(), clearance_z))},
-            {"start", vec(t.start)},
+            {"surface_point", vec3_json(t.surface_point)},
+            {"direction", vec3_json(t.direction)},
+            {"nominal_centre", vec3_json(t.nominal_centre)},
+            {"above", vec3_json(geometry::Vec3(t.start.x(), t.start.y(), clearance_z))},
+            {"start", vec3_json(t.start)},
             {"max_travel_mm", t.max_travel_mm},
             {"speed_mm_s", probe_speed_mm_s},
             {"retract_mm", t.retract_mm}};
@@ -71,10 +73,10 @@ json to_json(const geometry::EdgePoint& p) {
       {"id", p.id},
       {"kind", geometry::to_string(p.kind)},
       {"convex", p.convex},
-      {"position", vec(p.position)},
-      {"n_up", vec(p.n_up)},
-      {"n_down", p.n_down ? vec(*p.n_down) : json(nullptr)},
-      {"tangent", vec(p.tangent)},
+      {"position", vec3_json(p.position)},
+      {"n_up", vec3_json(p.n_up)},
+      {"n_down", p.n_down ? vec3_json(*p.n_down) : json(nullptr)},
+      {"tangent", vec3_json(p.tangent)},
       {"normals_inferred", p.normals_inferred},
       {"interior_angle_deg", p.interior_angle_rad ? json(degrees(*p.interior_angle_rad)) : json(nullptr)},
       {"normal_uncertainty_deg", {degrees(p.n_up_uncertainty_rad), degrees(p.n_down_uncertainty_rad)}},
@@ -92,8 +94,8 @@ json to_json(const geometry::Hole& h) {
   return {
       {"id", h.id},
       {"source", geometry::to_string(h.source)},
-      {"centre", vec(h.centre)},
-      {"axis", vec(h.axis)},
+      {"centre", vec3_json(h.centre)},
+      {"axis", vec3_json(h.axis)},
       {"radius", h.radius},
       {"perimeter", h.perimeter},
       {"roundness_mm", h.roundness_mm},
@@ -104,7 +106,7 @@ json to_json(const geometry::Hole& h) {
 }
 
 json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, const MeasurementPlan* plan,
-               const MachineDescription* machine, const json& registration) {
+               const description::MachineDescription* machine, const json& registration) {
   const auto& t = model.topology;
   const auto& r = inputs.read_report;
   json out = {
@@ -151,7 +153,7 @@ json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, co
   out["machine"] = to_json(*machine);
   out["clearance_z"] = plan->clearance_z;
   out["floor_z"] = plan->floor_z;
-  out["home"] = vec(plan->program.home);
+  out["home"] = vec3_json(plan->program.home);
   for (const Touch& t : plan->program.touches)
     out["program"].push_back(to_json(t, plan->clearance_z, machine->probe_speed_mm_s));
   out["estimate"] = {{"time_s", plan->program.time_s}, {"lower_bound_s", plan->program.lower_bound_s},

@@ -37,7 +37,7 @@ nlohmann::json to_json(const Touch& touch, double clearance_z, double probe_spee
 // Without a measurement plan the windows, approaches, program and estimate stay null or empty;
 // `registration` is the registration's JSON, or null when T_M_S is assumed to be the identity.
 nlohmann::json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs,
-                         const MeasurementPlan* plan = nullptr, const MachineDescription* machine = nullptr,
+                         const MeasurementPlan* plan = nullptr, const description::MachineDescription* machine = nullptr,
                          const nlohmann::json& registration = nullptr);
 
 }  // namespace cmm::planner

@@ -12,13 +12,15 @@
 #include <set>
 
 #include "geometry/file_error.hpp"
-#include "planner/json_fields.hpp"
+#include "hal/description/eigen_json.hpp"
+#include "hal/description/json_fields.hpp"
 #include "planner/number_text.hpp"
+#include "planner/plate_pose.hpp"
 
 namespace cmm::planner {
 namespace {
 
-using geometry::FileError;
+using description::JsonFields;
 using nlohmann::json;
 using Kind = RegistrationError::Kind;
 
@@ -29,21 +31,6 @@ std::string id_list(const std::vector<int>& ids) {
   std::string s;
   for (std::size_t i = 0; i < ids.size(); ++i) s += (i ? ", " : "") + std::to_string(ids[i]);
   return s;
-}
-
-// --- corners.json ----------------------------------------------------------------------------
-
-[[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& message) {
-  fail_field(source, field, message);
-}
-
-
-Vec3 vec3(const json& j, const std::string& source, const std::string& field) {
-  if (!j.is_array() || j.size() != 3) fail(source, field, "expected [x, y, z]");
-  static const char* axis[] = {"x", "y", "z"};
-  Vec3 v;
-  for (int i = 0; i < 3; ++i) v(i) = number(j[static_cast<std::size_t>(i)], source, field + "." + axis[i]);
-  return v;
 }
 
 // --- checks --------------------------------------------------------------------------------
@@ -105,7 +92,7 @@ void check_degenerate(const std::vector<int>& ids, const Frame& frame, double re
 }
 
 // "side corner 2–corner 3" or "diagonal corner 1–corner 3"; without a plate, "distance …".
-std::string length_name(const Plate* plate, int a, int b) {
+std::string length_name(const description::Plate* plate, int a, int b) {
   const char* what = !plate ? "distance " : plate->adjacent(a, b) ? "side " : "diagonal ";
   return what + corner_name(std::min(a, b)) + "–" + corner_name(std::max(a, b));
 }
@@ -121,7 +108,7 @@ std::string common_corner_hint(const std::vector<std::pair<int, int>>& failing) 
   return "";
 }
 
-void check_nominal_lengths(const std::vector<int>& ids, const Frame& frame, const Plate& plate, double tolerance) {
+void check_nominal_lengths(const std::vector<int>& ids, const Frame& frame, const description::Plate& plate, double tolerance) {
   std::vector<std::pair<int, int>> failing;
   std::string message;
   std::set<int> named;
@@ -141,7 +128,7 @@ void check_nominal_lengths(const std::vector<int>& ids, const Frame& frame, cons
                           message + " (tolerance " + fixed(tolerance) + " mm)" + common_corner_hint(failing));
 }
 
-void check_frame_lengths(const std::vector<int>& ids, const Frame& s, const Frame& m, const Plate* plate,
+void check_frame_lengths(const std::vector<int>& ids, const Frame& s, const Frame& m, const description::Plate* plate,
                          double tolerance) {
   std::vector<std::pair<int, int>> failing;
   std::string message;
@@ -178,8 +165,8 @@ std::string sorted_ids(std::vector<int> ids) {
   return id_list(ids);
 }
 
-std::string fiducial_name(const Plate& plate) {
-  if (plate.fiducial.kind == PlateFiducial::Kind::chamfer)
+std::string fiducial_name(const description::Plate& plate) {
+  if (plate.fiducial.kind == description::PlateFiducial::Kind::chamfer)
     return "the chamfer at corner " + std::to_string(plate.fiducial.corner);
   // Name the hole by its nearest corner: that is the corner it stands for.
   int nearest = 1;
@@ -189,8 +176,8 @@ std::string fiducial_name(const Plate& plate) {
   return "the hole near corner " + std::to_string(nearest);
 }
 
-int fiducial_corner(const Plate& plate) {
-  if (plate.fiducial.kind == PlateFiducial::Kind::chamfer) return plate.fiducial.corner;
+int fiducial_corner(const description::Plate& plate) {
+  if (plate.fiducial.kind == description::PlateFiducial::Kind::chamfer) return plate.fiducial.corner;
   int nearest = 1;
   const Vec3 centre(plate.fiducial.centre.x(), plate.fiducial.centre.y(), plate.top_z());
   for (int id = 2; id <= plate.corner_count(); ++id)
@@ -198,18 +185,18 @@ int fiducial_corner(const Plate& plate) {
   return nearest;
 }
 
-bool within(const FiducialDeviation& d, double tolerance) {
+bool within(const description::FiducialDeviation& d, double tolerance) {
   return d.off_mm <= tolerance && d.outside_mm <= tolerance;
 }
 
-FiducialCheck check_fiducial(const Plate& plate, const std::vector<int>& ids, const Frame& frame,
+FiducialCheck check_fiducial(const description::Plate& plate, const std::vector<int>& ids, const Frame& frame,
                              const Vec3& measured, const RegistrationOptions& options) {
   const Eigen::Isometry3d T_X_P = fit_plate_pose(plate, ids, frame.points);
   FiducialCheck check;
   check.frame = frame.name;
   check.measured = measured;
-  check.predicted = T_X_P * fiducial_geometry(plate).point;
-  check.deviation = fiducial_deviation(plate, T_X_P.inverse() * measured);
+  check.predicted = T_X_P * description::fiducial_geometry(plate).point;
+  check.deviation = description::fiducial_deviation(plate, T_X_P.inverse() * measured);
   check.tolerance_mm = options.fiducial_tolerance_mm;
   if (within(check.deviation, options.fiducial_tolerance_mm)) return check;
 
@@ -218,7 +205,7 @@ FiducialCheck check_fiducial(const Plate& plate, const std::vector<int>& ids, co
   std::string message = "fiducial in " + std::string(1, frame.name) + ": " + fiducial_name(plate) +
                         " is not where " + corner_name(home) + " should be: the measured point is " +
                         fixed(check.deviation.off_mm) + " mm off " +
-                        (plate.fiducial.kind == PlateFiducial::Kind::chamfer ? "the chamfer face's plane"
+                        (plate.fiducial.kind == description::PlateFiducial::Kind::chamfer ? "the chamfer face's plane"
                                                                              : "the hole's axis") +
                         " and " + fixed(check.deviation.outside_mm) +
                         " mm beyond its extent, where the plate pose fitted to the " + frame.name +
@@ -236,7 +223,7 @@ FiducialCheck check_fiducial(const Plate& plate, const std::vector<int>& ids, co
         }(),
         frame.points);
     if (refit.rms_mm > options.length_tolerance_mm) continue;
-    const FiducialDeviation d = fiducial_deviation(plate, refit.transform.inverse() * measured);
+    const description::FiducialDeviation d = description::fiducial_deviation(plate, refit.transform.inverse() * measured);
     if (!within(d, options.fiducial_tolerance_mm)) continue;
     const int labelled = (n - k) % n + 1;  // the label whose shifted id is 1
     throw RegistrationError(Kind::fiducial, {labelled, 1},
@@ -245,7 +232,7 @@ FiducialCheck check_fiducial(const Plate& plate, const std::vector<int>& ids, co
                                 " is the plate's " + corner_name(1) + "; relabel the " + frame.name + " corners");
   }
   std::string symmetric;
-  for (int k : symmetry_shifts(plate)) symmetric += (symmetric.empty() ? "" : " or ") + std::to_string(k);
+  for (int k : description::symmetry_shifts(plate)) symmetric += (symmetric.empty() ? "" : " or ") + std::to_string(k);
   const std::string hint =
       symmetric.empty() ? ""
                         : "; the plate looks the same with its corners shifted by " + symmetric +
@@ -256,104 +243,69 @@ FiducialCheck check_fiducial(const Plate& plate, const std::vector<int>& ids, co
                               "; otherwise check the fiducial measurement and the plate description");
 }
 
-json matrix_json(const Eigen::Matrix4d& m) {
-  json rows = json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
-  return rows;
-}
-
-json vec_json(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
-
 }  // namespace
 
 RegistrationInput registration_from_json(const json& j, const std::string& source,
                                          const std::filesystem::path& base_dir) {
-  if (!j.is_object()) fail(source, "registration", "expected an object");
-  only_known_keys(j, source, "",
-                  {"description", "plate", "noise_mm", "noise_scan_mm", "noise_machine_mm", "corners", "fiducial",
-                   "scan_up", "rms_tolerance_mm", "length_tolerance_mm", "fiducial_tolerance_mm"});
+  JsonFields f(j);
   RegistrationInput input;
   input.source = source;
-  if (j.contains("plate") && !j["plate"].is_null()) {
-    const json& p = j["plate"];
-    if (p.is_string()) {
-      std::filesystem::path file = p.get<std::string>();
-      if (file.is_relative()) file = base_dir / file;
-      input.plate = read_plate(file);
-    } else if (p.is_object()) {
-      try {
-        input.plate = plate_from_json(p, source + ": plate");
-      } catch (const FileError& e) {
-        throw FileError::nested(e, "/plate");
-      }
-    } else {
-      fail(source, "plate", "expected a path to plate.json or an inline plate object");
-    }
-  }
+  if (!f.expect_object()) f.throw_if_problems(source);
+  f.text("description", "");  // for the reader of the file
+  const bool no_plate = !f.has("plate") || j["plate"].is_null() || (j["plate"].is_string() && j["plate"].get<std::string>().empty());
+  if (!no_plate)
+    input.plate = description::described(f, "plate", description::Plate{}, base_dir, description::plate_from_json,
+                                         description::read_plate);
+  else
+    f.member("plate");
 
-  if (j.contains("noise_mm")) input.noise_scan_mm = input.noise_machine_mm = positive(j["noise_mm"], source, "noise_mm");
-  if (j.contains("noise_scan_mm")) input.noise_scan_mm = positive(j["noise_scan_mm"], source, "noise_scan_mm");
-  if (j.contains("noise_machine_mm"))
-    input.noise_machine_mm = positive(j["noise_machine_mm"], source, "noise_machine_mm");
-  if (!j.contains("noise_mm") && !(j.contains("noise_scan_mm") && j.contains("noise_machine_mm")))
+  input.noise_scan_mm = input.noise_machine_mm = f.positive("noise_mm", input.noise_scan_mm);
+  input.noise_scan_mm = f.positive("noise_scan_mm", input.noise_scan_mm);
+  input.noise_machine_mm = f.positive("noise_machine_mm", input.noise_machine_mm);
+  if (!f.has("noise_mm") && !(f.has("noise_scan_mm") && f.has("noise_machine_mm")))
     input.notes.push_back("noise_mm not given: the predicted uncertainty assumes σ = " + fixed(input.noise_scan_mm, 3) +
                           " mm (S) and " + fixed(input.noise_machine_mm, 3) + " mm (M) per coordinate");
 
-  if (!j.contains("corners")) fail(source, "corners", "missing");
-  const json& corners = j["corners"];
-  if (!corners.is_array()) fail(source, "corners", "expected an array of {\"id\", \"scan\", \"machine\"}");
-  for (std::size_t i = 0; i < corners.size(); ++i) {
-    const std::string field = "corners[" + std::to_string(i) + "]";
-    const json& c = corners[i];
-    if (!c.is_object()) fail(source, field, "expected {\"id\", \"scan\", \"machine\"}");
-    only_known_keys(c, source, field, {"id", "scan", "machine"});
-    CornerPair pair;
-    if (!c.contains("id")) fail(source, field + ".id", "expected an integer corner id");
-    pair.id = integer(c["id"], source, field + ".id", 1, std::numeric_limits<int>::max());
-    if (!c.contains("scan")) fail(source, field + ".scan", "missing");
-    if (!c.contains("machine")) fail(source, field + ".machine", "missing");
-    pair.scan = vec3(c["scan"], source, field + ".scan");
-    pair.machine = vec3(c["machine"], source, field + ".machine");
-    input.corners.push_back(pair);
-  }
+  if (f.require("corners", "[{\"id\", \"scan\", \"machine\"}, ...]"))
+    for (JsonFields& c : f.objects("corners")) {
+      if (!c.value().is_object()) continue;
+      CornerPair pair;
+      if (c.require("id", "an integer corner id")) pair.id = c.integer("id", 0, 1, std::numeric_limits<int>::max());
+      if (c.require("scan")) pair.scan = c.vec3("scan", pair.scan);
+      if (c.require("machine")) pair.machine = c.vec3("machine", pair.machine);
+      c.finish();
+      input.corners.push_back(pair);
+    }
 
-  if (j.contains("fiducial") && !j["fiducial"].is_null()) {
-    const json& f = j["fiducial"];
-    if (!f.is_object()) fail(source, "fiducial", "expected {\"machine\": [x, y, z], \"scan\": [x, y, z]}");
-    only_known_keys(f, source, "fiducial", {"machine", "scan"});
-    if (f.contains("machine")) input.fiducial_machine = vec3(f["machine"], source, "fiducial.machine");
-    if (f.contains("scan")) input.fiducial_scan = vec3(f["scan"], source, "fiducial.scan");
+  if (f.has("fiducial") && !j["fiducial"].is_null()) {
+    JsonFields fiducial = f.object("fiducial");
+    if (fiducial.has("machine")) input.fiducial_machine = fiducial.vec3("machine", Vec3::Zero());
+    if (fiducial.has("scan")) input.fiducial_scan = fiducial.vec3("scan", Vec3::Zero());
+    fiducial.finish();
+  } else {
+    f.member("fiducial");
   }
-  if (j.contains("scan_up")) {
-    const Vec3 up = vec3(j["scan_up"], source, "scan_up");
-    if (!(up.norm() > 0)) fail(source, "scan_up", "must not be zero");
-    input.scan_up = up.normalized();
+  if (f.has("scan_up")) {
+    const Vec3 up = f.vec3("scan_up", Vec3::UnitZ());
+    if (!(up.norm() > 0)) f.problem("scan_up", "must not be zero");
+    else input.scan_up = up.normalized();
   }
   RegistrationOptions& o = input.options;
-  if (j.contains("rms_tolerance_mm")) o.rms_tolerance_mm = positive(j["rms_tolerance_mm"], source, "rms_tolerance_mm");
-  if (j.contains("length_tolerance_mm"))
-    o.length_tolerance_mm = positive(j["length_tolerance_mm"], source, "length_tolerance_mm");
-  if (j.contains("fiducial_tolerance_mm"))
-    o.fiducial_tolerance_mm = positive(j["fiducial_tolerance_mm"], source, "fiducial_tolerance_mm");
+  o.rms_tolerance_mm = f.positive("rms_tolerance_mm", o.rms_tolerance_mm);
+  o.length_tolerance_mm = f.positive("length_tolerance_mm", o.length_tolerance_mm);
+  o.fiducial_tolerance_mm = f.positive("fiducial_tolerance_mm", o.fiducial_tolerance_mm);
+  f.finish();
+  f.throw_if_problems(source);
   return input;
 }
 
 RegistrationInput read_registration(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in) throw FileError::whole(file, "cannot open the registration input");
-  json j;
-  try {
-    j = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw FileError::at_byte(file, e.byte, "not valid JSON");
-  } catch (const json::exception& e) {  // a number beyond a double's range (1e400)
-    throw FileError::whole(file, std::string("not valid JSON: ") + e.what());
-  }
-  return registration_from_json(j, file.string(), file.parent_path());
+  return registration_from_json(description::read_json_file(file, "the registration input"), file.string(),
+                                file.parent_path());
 }
 
-RegistrationResult fit_registration(const RegistrationInput& input, const Plate* plate_given) {
-  const Plate* plate = plate_given ? plate_given : input.plate ? &*input.plate : nullptr;
+RegistrationResult fit_registration(const RegistrationInput& input, const description::Plate* plate_given) {
+  const description::Plate* plate = plate_given ? plate_given : input.plate ? &*input.plate : nullptr;
   const RegistrationOptions& options = input.options;
   const auto& corners = input.corners;
   if (corners.size() < 3)
@@ -450,7 +402,7 @@ json to_json(const RegistrationResult& r) {
   json residuals = json::array(), corners = json::array();
   for (std::size_t i = 0; i < r.ids.size(); ++i) {
     residuals.push_back(r.fit.residual_norms[i]);
-    corners.push_back({{"id", r.ids[i]}, {"residual_mm", vec_json(r.fit.residuals[i])},
+    corners.push_back({{"id", r.ids[i]}, {"residual_mm", description::vec3_json(r.fit.residuals[i])},
                        {"norm_mm", r.fit.residual_norms[i]}});
   }
   const RigidFitUncertainty& p = r.predicted;
@@ -463,13 +415,13 @@ json to_json(const RegistrationResult& r) {
   json fiducial = json::array();
   for (const FiducialCheck& f : r.fiducial_checks)
     fiducial.push_back({{"frame", std::string(1, f.frame)},
-                        {"measured", vec_json(f.measured)},
-                        {"predicted", vec_json(f.predicted)},
+                        {"measured", description::vec3_json(f.measured)},
+                        {"predicted", description::vec3_json(f.predicted)},
                         {"off_mm", f.deviation.off_mm},
                         {"outside_mm", f.deviation.outside_mm},
                         {"tolerance_mm", f.tolerance_mm}});
   return {
-      {"T_M_S", matrix_json(r.T_M_S.matrix())},
+      {"T_M_S", description::transform_json(r.T_M_S)},
       {"residuals_mm", residuals},
       {"rms_mm", r.fit.rms_mm},
       {"corners", corners},
@@ -479,17 +431,17 @@ json to_json(const RegistrationResult& r) {
         {"sigma_eff_mm", p.sigma_eff_mm},
         {"rotation_rms_rad", p.rotation_rms_rad},
         {"rotation_rms_deg", p.rotation_rms_rad * 180 / std::numbers::pi},
-        {"rotation_std_rad", vec_json(p.rotation_std_rad)},
+        {"rotation_std_rad", description::vec3_json(p.rotation_std_rad)},
         {"translation_rms_at_centroid_mm", p.translation_rms_at_centroid_mm},
         {"translation_rms_at_origin_mm", p.translation_rms_at_origin_mm},
         {"expected_rms_mm", p.expected_rms_mm},
-        {"centroid_S", vec_json(p.centroid_from)},
-        {"centroid_M", vec_json(r.T_M_S * p.centroid_from)},
+        {"centroid_S", description::vec3_json(p.centroid_from)},
+        {"centroid_M", description::vec3_json(r.T_M_S * p.centroid_from)},
         {"covariance", covariance},
         {"covariance_parameters",
          "[wx, wy, wz] rad: rotation vector in M axes, R = exp([w]x) R_fit; [cx, cy, cz] mm: error of "
          "T_M_S * centroid_S in M"}}},
-      {"plate_pose", r.T_M_P ? json{{"T_M_P", matrix_json(r.T_M_P->matrix())}} : json(nullptr)},
+      {"plate_pose", r.T_M_P ? json{{"T_M_P", description::transform_json(*r.T_M_P)}} : json(nullptr)},
       {"fiducial", fiducial},
       {"order_verified", r.order_verified},
       {"notes", r.notes},

@@ -12,7 +12,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
-#include "planner/plate.hpp"
+#include "hal/description/plate.hpp"
 #include "planner/rigid_fit.hpp"
 
 namespace cmm::planner {
@@ -59,7 +59,7 @@ struct RegistrationOptions {
 // What corners.json holds (docs/registration.md).
 struct RegistrationInput {
   std::string source = "<json>";  // file the input came from, for messages
-  std::optional<Plate> plate;
+  std::optional<description::Plate> plate;
   double noise_scan_mm = 0.01;     // σ per coordinate of the scan corners
   double noise_machine_mm = 0.01;  // σ per coordinate of the machine corners
   std::vector<CornerPair> corners;
@@ -70,9 +70,9 @@ struct RegistrationInput {
   std::vector<std::string> notes;  // defaults the reader filled in
 };
 
-// Reads corners.json. Errors are geometry::FileError and name the file and the field
-// ("corners.json: corners[2].machine: expected [x, y, z]"). A "plate" string is a path relative to
-// corners.json's folder.
+// Reads corners.json. Errors are description::FieldError and name the file and every bad field
+// ("corners.json: /corners/2/machine: must be [x, y, z], not [1, 2]"). A "plate" string is a path
+// relative to corners.json's folder.
 RegistrationInput read_registration(const std::filesystem::path& file);
 RegistrationInput registration_from_json(const nlohmann::json& j, const std::string& source = "<json>",
                                          const std::filesystem::path& base_dir = {});
@@ -83,7 +83,7 @@ struct FiducialCheck {
   char frame = 'M';
   Vec3 measured = Vec3::Zero();   // in that frame
   Vec3 predicted = Vec3::Zero();  // the nominal fiducial point through the plate pose
-  FiducialDeviation deviation;
+  description::FiducialDeviation deviation;
   double tolerance_mm = 0;
 };
 
@@ -100,7 +100,7 @@ struct RegistrationResult {
 
 // Checks, fits and checks again; throws RegistrationError naming the first problem found. The plate
 // is `plate` if given, else the input's, else none (then only S against M is checked).
-RegistrationResult fit_registration(const RegistrationInput& input, const Plate* plate = nullptr);
+RegistrationResult fit_registration(const RegistrationInput& input, const description::Plate* plate = nullptr);
 
 // The plan JSON's "registration": {"T_M_S" (4×4, row-major nested arrays), "residuals_mm" (per
 // corner norm, input order), "rms_mm", "corners", "predicted", "plate_pose", "fiducial", "notes"}.

@@ -1,13 +1,14 @@
 // Serialises a MeasurementResult; the field list is docs/result.md's.
 #include "planner/result_json.hpp"
 
+#include "hal/description/eigen_json.hpp"
+
 namespace cmm::planner {
 
 namespace {
 
+using description::vec3_json;
 using nlohmann::json;
-
-json vec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
 
 json matrix(const Eigen::Matrix3d& m) {
   json rows = json::array();
@@ -18,8 +19,8 @@ json matrix(const Eigen::Matrix3d& m) {
 json reason(const std::string& text) { return text.empty() ? json(nullptr) : json(text); }
 
 json point_json(const MeasuredPoint& p) {
-  return {{"position", vec(p.position)},
-          {"tangent", vec(p.tangent)},
+  return {{"position", vec3_json(p.position)},
+          {"tangent", vec3_json(p.tangent)},
           {"covariance_mm2", matrix(p.covariance)}};
 }
 
@@ -30,7 +31,7 @@ json edge_json(const EdgeResult& e) {
             {"status", to_string(e.status)},
             {"reason", reason(e.reason)},
             {"touches", e.touch_ids},
-            {"reference_S", vec(e.reference)},
+            {"reference_S", vec3_json(e.reference)},
             {"measured_S", nullptr},
             {"measured_M", nullptr},
             {"deviation_mm", nullptr},
@@ -44,7 +45,7 @@ json edge_json(const EdgeResult& e) {
   j["measured_S"] = point_json(*e.scan);
   j["measured_M"] = point_json(*e.machine);
   j["deviation_mm"] = e.deviation.signed_mm;
-  j["deviation"] = {{"vector_S", vec(e.deviation.vector)},
+  j["deviation"] = {{"vector_S", vec3_json(e.deviation.vector)},
                     {"outward_mm", e.deviation.outward_mm},
                     {"sideways_mm", e.deviation.sideways_mm}};
   j["sigma_mm"] = e.scan->sigma_mm;
@@ -56,7 +57,7 @@ json edge_json(const EdgeResult& e) {
 }
 
 json bore_json(const BoreMeasurement& b) {
-  return {{"centre", vec(b.centre)}, {"axis", vec(b.axis)}, {"centre_covariance_mm2", matrix(b.centre_covariance)}};
+  return {{"centre", vec3_json(b.centre)}, {"axis", vec3_json(b.axis)}, {"centre_covariance_mm2", matrix(b.centre_covariance)}};
 }
 
 json hole_json(const HoleResult& h) {
@@ -65,7 +66,7 @@ json hole_json(const HoleResult& h) {
             {"reason", reason(h.reason)},
             {"touches", h.touch_ids},
             {"depth_mm", h.depth_mm},
-            {"nominal", {{"centre_S", vec(h.nominal_centre)}, {"axis_S", vec(h.nominal_axis)},
+            {"nominal", {{"centre_S", vec3_json(h.nominal_centre)}, {"axis_S", vec3_json(h.nominal_axis)},
                          {"diameter_mm", h.nominal_diameter_mm}}},
             {"measured_S", nullptr},
             {"measured_M", nullptr},
@@ -90,7 +91,7 @@ json hole_json(const HoleResult& h) {
   j["centre_sigma_mm"] = b.centre_sigma_mm;
   j["diameter_sigma_mm"] = b.diameter_sigma_mm;
   j["residuals_mm"] = b.residuals_mm;
-  j["centre_offset_S"] = vec(h.centre_offset);
+  j["centre_offset_S"] = vec3_json(h.centre_offset);
   j["centre_deviation_mm"] = h.centre_deviation_mm;
   j["diameter_deviation_mm"] = h.diameter_deviation_mm;
   return j;
@@ -115,16 +116,13 @@ json summary_json(const ResultSummary& s) {
 }  // namespace
 
 json to_json(const MeasurementResult& result) {
-  json T = json::array();
-  const Eigen::Matrix4d m = result.T_M_S.matrix();
-  for (int r = 0; r < 4; ++r) T.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
   json edges = json::array(), holes = json::array();
   for (const EdgeResult& e : result.edges) edges.push_back(edge_json(e));
   for (const HoleResult& h : result.holes) holes.push_back(hole_json(h));
   return {{"schema", result_schema_id},
           {"units", "mm"},
           {"frame", "S"},
-          {"T_M_S", std::move(T)},
+          {"T_M_S", description::transform_json(result.T_M_S)},
           {"probe", {{"ball_radius_mm", result.ball_radius_mm}, {"trigger_sigma_mm", result.trigger_sigma_mm}}},
           {"summary", summary_json(result.summary)},
           {"edge_points", std::move(edges)},

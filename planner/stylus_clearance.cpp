@@ -30,7 +30,7 @@ ClearanceCheck refuse(std::string reason) { return {false, std::move(reason)}; }
 }  // namespace
 
 StylusClearance::StylusClearance(const geometry::BallSweeper& obstacles, double floor_z,
-                                 const MachineDescription& machine, double ball_radius, double clearance_z,
+                                 const description::MachineDescription& machine, double ball_radius, double clearance_z,
                                  double delta)
     : obstacles_(obstacles),
       floor_z_(floor_z),

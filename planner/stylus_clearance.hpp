@@ -5,7 +5,7 @@
 #include <string>
 
 #include "geometry/ball_sweep.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/touch.hpp"
 
 namespace cmm::planner {
@@ -19,7 +19,7 @@ class StylusClearance {
  public:
   // `obstacles` is the reference mesh in M; nothing of the stylus may go below `floor_z` (the
   // table or base-plate top). `delta` bounds how far the real surface may be from the mesh.
-  StylusClearance(const geometry::BallSweeper& obstacles, double floor_z, const MachineDescription& machine,
+  StylusClearance(const geometry::BallSweeper& obstacles, double floor_z, const description::MachineDescription& machine,
                   double ball_radius, double clearance_z, double delta);
 
   // Descent from the clearance plane to the start, the search to the latest possible contact,
@@ -33,8 +33,8 @@ class StylusClearance {
 
   const geometry::BallSweeper& obstacles_;
   double floor_z_;
-  const MachineDescription& machine_;
-  StylusTip tip_;
+  const description::MachineDescription& machine_;
+  description::StylusTip tip_;
   double radius_, clearance_z_, delta_;
 };
 

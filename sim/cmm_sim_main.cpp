@@ -4,7 +4,6 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <thread>
@@ -12,7 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
-#include "hal/config_block.hpp"
+#include "hal/description/json_fields.hpp"
 #include "hal/modbus_map.hpp"
 #include "sim/grbl_server.hpp"
 #include "sim/modbus_server.hpp"
@@ -53,13 +52,7 @@ int main(int argc, char** argv) {
     nlohmann::json block = nlohmann::json::object();
     std::string base_dir = ".";
     if (!config_file.empty()) {
-      std::ifstream in(config_file);
-      try {
-        block = nlohmann::json::parse(in);
-      } catch (const nlohmann::json::exception& e) {  // out_of_range too: a number like 1e400
-        std::cerr << "cmm-sim: " << config_file << ": " << e.what() << "\n";
-        return 2;
-      }
+      block = cmm::description::read_json_file(config_file, "the simulator's config");
       base_dir = std::filesystem::absolute(config_file).parent_path().string();
     }
     if (time_scale >= 0) block["time_scale"] = time_scale;
@@ -113,7 +106,7 @@ int main(int argc, char** argv) {
     if (rtu_loop.joinable()) rtu_loop.join();
     if (grbl_thread.joinable()) grbl_thread.join();
     return status;
-  } catch (const cmm::hal::ConfigError& e) {
+  } catch (const cmm::description::FieldError& e) {
     std::cerr << "cmm-sim: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {

@@ -191,7 +191,7 @@ void GrblServer::receive(char byte) {
 
 void GrblServer::status_report() {
   const hal::MachineStatus s = machine_.status();
-  const hal::MachineInfo info = machine_.info();
+  const description::MachineDescription info = machine_.info();
   Vec3 offset = Vec3::Zero();
   for (const auto& tip : info.tips)
     if (tip.id == info.active_tip) offset = tip.offset;
@@ -207,7 +207,7 @@ void GrblServer::status_report() {
     r.feed_mm_min = in_motion_ ? feed_mm_min_ : 0;
   }
   r.mpos = s.position - offset;
-  r.pins = s.estop ? "R" : "";
+  r.pins = std::string(s.estop ? "R" : "");  // a temporary: GCC 12 -O3 warns falsely (-Wrestrict) on assign(const char*)
   r.clock_s = s.t_s;
   write_line(grbl::format_status(r));
 }
@@ -288,10 +288,16 @@ void GrblServer::emit(const std::string& text, std::uint64_t generation) {
 }
 
 std::string GrblServer::settings_report() const {
-  const hal::MachineInfo info = machine_.info();
+  const description::MachineDescription info = machine_.info();
   const Vec3 travel = info.travel_box.max - info.travel_box.min;
   std::string out;
-  auto put = [&](int n, double v) { out += "$" + std::to_string(n) + "=" + grbl::format_number(v) + "\r\n"; };
+  auto put = [&](int n, double v) {  // appended piece by piece: GCC 12 -O3's false -Wrestrict (bug 105329)
+    out += '$';
+    out += std::to_string(n);
+    out += '=';
+    out += grbl::format_number(v);
+    out += "\r\n";
+  };
   put(10, 1);   // MPos in status reports
   put(20, 1);   // soft limits
   put(21, 0);   // hard limits
@@ -407,7 +413,7 @@ void GrblServer::execute(const std::string& raw, std::uint64_t generation) {
   const bool probe = is(*motion, 38.2) || is(*motion, 38.3);
   if ((probe || is(*motion, 1)) && !(feed_mm_min_ > 0)) return error(grbl::kErrorNoFeed);
 
-  const hal::MachineInfo info = machine_.info();
+  const description::MachineDescription info = machine_.info();
   Vec3 offset = Vec3::Zero();
   for (const auto& tip : info.tips)
     if (tip.id == info.active_tip) offset = tip.offset;
@@ -460,7 +466,7 @@ bool GrblServer::begin_motion(int& command, bool homing) {
 
 void GrblServer::fault(const hal::Fault& f, std::uint64_t generation, int command, bool probe) {
   const auto position = [&] {
-    const hal::MachineInfo info = machine_.info();
+    const description::MachineDescription info = machine_.info();
     Vec3 offset = Vec3::Zero();
     for (const auto& tip : info.tips)
       if (tip.id == info.active_tip) offset = tip.offset;

@@ -238,7 +238,7 @@ void ModbusServer::refresh() {
   // sees a command done never sees the machine still moving from it.
   std::lock_guard lock(mutex_);
   const hal::MachineStatus s = machine_.status();
-  const hal::MachineInfo info = machine_.info();
+  const description::MachineDescription info = machine_.info();
   r[mb::address("protocol_version")] = mb::kProtocolVersion;
   r[mb::address("flags")] = static_cast<std::uint16_t>((s.homed ? mb::homed : 0) | (s.moving ? mb::moving : 0) |
                                                        (s.estop ? mb::estop : 0) | (s.aborted ? mb::aborted : 0) |
@@ -269,7 +269,7 @@ void ModbusServer::refresh() {
   const int tips = std::min<int>(static_cast<int>(info.tips.size()), mb::kMaxTips);
   r[mb::address("tip_count")] = static_cast<std::uint16_t>(tips);
   for (int i = 0; i < tips; ++i) {
-    const hal::TipInfo& tip = info.tips[static_cast<std::size_t>(i)];
+    const description::StylusTip& tip = info.tips[static_cast<std::size_t>(i)];
     std::uint16_t* base = r + i * mb::kTipStride;
     mb::put_ascii(base + mb::address("tip_id"), 4, tip.id);
     mb::put_u32(base + mb::address("tip_radius"), mb::to_unsigned(tip.ball_radius_mm, 1e-6));
@@ -340,7 +340,7 @@ void ModbusServer::execute(const Command& command) {
         if (b[1] == mb::Opcode::select_tip) {
           machine_.select_tip(tips[index].id);
         } else {
-          hal::TipQualification q;
+          description::TipQualification q;
           q.offset = xyz;
           q.ball_radius_mm = mb::get_u32(reg(mb::address("max_travel"))) * 1e-6;
           q.time_utc = hal::utc_text(mb::get_u32(reg(mb::address("min_travel"))));

@@ -13,11 +13,11 @@ using geometry::Vec3;
 
 namespace {
 // The top outline, counter-clockwise from +z, with the chamfered corner split in two.
-std::vector<Vec3> outline(const planner::Plate& plate) {
+std::vector<Vec3> outline(const description::Plate& plate) {
   std::vector<Vec3> out;
   for (int id = 1; id <= plate.corner_count(); ++id) {
     const Vec3& c = plate.corner(id);
-    if (plate.fiducial.kind == planner::PlateFiducial::Kind::chamfer && id == plate.fiducial.corner) {
+    if (plate.fiducial.kind == description::PlateFiducial::Kind::chamfer && id == plate.fiducial.corner) {
       const double s = plate.fiducial.size_mm;
       out.push_back(c + s * (plate.corner(plate.previous(id)) - c).normalized());
       out.push_back(c + s * (plate.corner(plate.next(id)) - c).normalized());
@@ -51,8 +51,8 @@ geometry::TriangleMesh prism(const std::vector<Vec3>& top, double thickness) {
 }
 }  // namespace
 
-geometry::TriangleMesh plate_mesh(const planner::Plate& plate) {
-  if (plate.fiducial.kind == planner::PlateFiducial::Kind::chamfer) return prism(outline(plate), plate.thickness_mm);
+geometry::TriangleMesh plate_mesh(const description::Plate& plate) {
+  if (plate.fiducial.kind == description::PlateFiducial::Kind::chamfer) return prism(outline(plate), plate.thickness_mm);
 
   const auto& c = plate.corners;
   const bool rectangle = c.size() == 4 && c[0].y() == c[1].y() && c[1].x() == c[2].x() && c[2].y() == c[3].y() &&

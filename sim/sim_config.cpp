@@ -8,13 +8,7 @@
 
 namespace cmm::sim {
 
-extern const char* const default_plate_json;
-
-planner::Plate default_plate() {
-  return planner::plate_from_json(nlohmann::json::parse(default_plate_json), "config/plate.json");
-}
-
-Eigen::Isometry3d read_pose(hal::ConfigBlock block, const Eigen::Isometry3d& fallback) {
+Eigen::Isometry3d read_pose(description::JsonFields block, const Eigen::Isometry3d& fallback) {
   if (!block.has("rotation_deg") && !block.has("translation")) {
     block.finish();
     return fallback;
@@ -30,12 +24,14 @@ Eigen::Isometry3d read_pose(hal::ConfigBlock block, const Eigen::Isometry3d& fal
 }
 
 SimConfig sim_config_from_json(const nlohmann::json& j, const std::string& base_dir) {
-  hal::ConfigBlock block(j);
+  description::JsonFields block(j);
+  block.expect_object();
   SimConfig c;
   block.text("driver", "sim", {"sim"});
-  c.machine = hal::described(block, "machine", planner::default_machine(), base_dir, planner::machine_from_json,
-                        planner::read_machine);
-  c.plate = hal::described(block, "plate", default_plate(), base_dir, planner::plate_from_json, planner::read_plate);
+  c.machine = description::described(block, "machine", c.machine, base_dir, description::machine_from_json,
+                                     description::read_machine);
+  c.plate = description::described(block, "plate", c.plate, base_dir, description::plate_from_json,
+                                   description::read_plate);
 
   // By default the plate stands near the middle of the default travel box and the part near the
   // plate's middle, both square to the axes.
@@ -47,12 +43,12 @@ SimConfig sim_config_from_json(const nlohmann::json& j, const std::string& base_
   c.T_P_Part = read_pose(block.object("part_pose"), part_pose);
 
   {
-    hal::ConfigBlock part = block.object("part");
+    description::JsonFields part = block.object("part");
     const auto& names = geometry::analytic_part_names();
     c.part.analytic = part.text("analytic", c.part.analytic, std::set<std::string>(names.begin(), names.end()));
     c.part.edge_length_mm = part.number("edge_length_mm", c.part.edge_length_mm, 0.05, 50);
     c.part.mesh_file = part.text("mesh", "");
-    if (!c.part.mesh_file.empty()) c.part.mesh_file = hal::resolve_config_path(c.part.mesh_file, base_dir).string();
+    if (!c.part.mesh_file.empty()) c.part.mesh_file = description::resolve_config_path(c.part.mesh_file, base_dir).string();
     c.part.scale = part.number("scale", 1, 1e-6, 1e6);
     part.finish();
   }
@@ -72,13 +68,11 @@ SimConfig sim_config_from_json(const nlohmann::json& j, const std::string& base_
   if (!box.contains(c.home_position)) block.problem("home_position", "must lie inside the machine's travel box");
 
   {
-    hal::ConfigBlock tips = block.object("true_tips");
-    if (const nlohmann::json* all = block.raw("true_tips"); all && all->is_object()) {
-      for (const auto& [id, value] : all->items()) {
-        bool known = false;
-        for (const auto& tip : c.machine.tips) known = known || tip.id == id;
-        hal::ConfigBlock tip = tips.object(id);
-        if (!known) tips.problem(id, "no tip with this id in the machine description");
+    description::JsonFields tips = block.object("true_tips");
+    if (tips.value().is_object()) {
+      for (const auto& [id, value] : tips.value().items()) {
+        description::JsonFields tip = tips.object(id);
+        if (!c.machine.find_tip(id)) tips.problem(id, "no tip with this id in the machine description");
         TrueTip truth;
         truth.ball_radius_mm = tip.number("ball_radius_mm", 0, 0.01, 50);
         truth.offset = tip.vec3("offset_error", Vec3::Zero());
@@ -89,7 +83,7 @@ SimConfig sim_config_from_json(const nlohmann::json& j, const std::string& base_
   }
 
   {
-    hal::ConfigBlock f = block.object("faults");
+    description::JsonFields f = block.object("faults");
     c.faults.drop_link_after_commands = f.integer("drop_link_after_commands", 0, 0, 1 << 30);
     c.faults.reply_delay_s = f.number("reply_delay_s", 0, 0, 3600);
     c.faults.corrupt_reply_at_command = f.integer("corrupt_reply_at_command", 0, 0, 1 << 30);

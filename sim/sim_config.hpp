@@ -11,9 +11,10 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
-#include "hal/config_block.hpp"
-#include "planner/machine.hpp"
-#include "planner/plate.hpp"
+#include "hal/description/json_fields.hpp"
+#include "hal/description/machine_description.hpp"
+#include "hal/description/plate.hpp"
+#include "geometry/mesh.hpp"
 
 namespace cmm::sim {
 
@@ -45,8 +46,8 @@ struct FaultInjection {
 };
 
 struct SimConfig {
-  planner::MachineDescription machine;
-  planner::Plate plate;
+  description::MachineDescription machine = description::default_machine();
+  description::Plate plate = description::default_plate();
   Eigen::Isometry3d T_M_P = Eigen::Isometry3d::Identity();     // where the plate stands in M
   PartSource part;
   Eigen::Isometry3d T_P_Part = Eigen::Isometry3d::Identity();  // where the part stands on the plate
@@ -64,13 +65,10 @@ struct SimConfig {
 };
 
 // Reads the block; relative file names resolve against `base_dir`. A bad block throws
-// hal::ConfigError listing every problem with its JSON Pointer.
+// description::FieldError listing every problem with its JSON Pointer.
 SimConfig sim_config_from_json(const nlohmann::json& block, const std::string& base_dir = ".");
 
-// config/plate.json, compiled in: the plate the simulator uses unless told otherwise.
-planner::Plate default_plate();
-
 // A pose block {"rotation_deg": [rx, ry, rz] (applied x, then y, then z), "translation": [x, y, z]}.
-Eigen::Isometry3d read_pose(hal::ConfigBlock block, const Eigen::Isometry3d& fallback);
+Eigen::Isometry3d read_pose(description::JsonFields block, const Eigen::Isometry3d& fallback);
 
 }  // namespace cmm::sim

@@ -61,9 +61,7 @@ SimulatedMachine::SimulatedMachine(const SimConfig& config)
     : config_(config), scene_(build_scene(config)), contact_(std::make_unique<SceneContact>(scene_)), rng_(config.seed) {
   for (const auto& t : config_.machine.tips) {
     Tip tip;
-    tip.info.id = t.id;
-    tip.info.ball_radius_mm = t.ball_radius_mm;
-    tip.info.offset = t.offset;
+    tip.info = t;
     tip.true_radius = t.ball_radius_mm;
     tip.true_offset = t.offset;
     if (auto it = config_.true_tips.find(t.id); it != config_.true_tips.end()) {
@@ -87,18 +85,13 @@ std::size_t SimulatedMachine::tip_index(const std::string& id) const {
 double SimulatedMachine::true_ball_radius(const std::string& id) const { return tips_[tip_index(id)].true_radius; }
 Vec3 SimulatedMachine::true_offset(const std::string& id) const { return tips_[tip_index(id)].true_offset; }
 
-hal::MachineInfo SimulatedMachine::info() const {
+description::MachineDescription SimulatedMachine::info() const {
   std::lock_guard lock(mutex_);
-  hal::MachineInfo info;
-  info.driver = "sim";
-  info.description = config_.machine.tips.empty() ? "simulated CMM" : "simulated CMM (" + config_.part.analytic + ")";
-  info.travel_box = {config_.machine.travel_box.min, config_.machine.travel_box.max};
-  info.max_speed_mm_s = config_.machine.max_speed_mm_s;
-  info.max_accel_mm_s2 = config_.machine.max_accel_mm_s2;
-  info.probe_speed_mm_s = config_.machine.probe_speed_mm_s;
+  description::MachineDescription info = config_.machine;
+  info.name = "simulated CMM (" + (config_.part.mesh_file.empty() ? config_.part.analytic : config_.part.mesh_file) + ")";
+  info.tips.clear();
   for (const auto& t : tips_) info.tips.push_back(t.info);
   info.active_tip = active().info.id;
-  info.reference_sphere = {config_.machine.reference_sphere.centre, config_.machine.reference_sphere.radius_mm};
   return info;
 }
 
@@ -139,7 +132,7 @@ void SimulatedMachine::check_can_move(bool need_homed) const {
 
 void SimulatedMachine::check_in_box(const Vec3& ball, const char* what) const {
   if (!ball.allFinite()) throw std::invalid_argument(std::string(what) + " is not finite");
-  if (!hal::TravelBox{config_.machine.travel_box.min, config_.machine.travel_box.max}.contains(ball, 1e-9))
+  if (!config_.machine.travel_box.contains(ball, 1e-9))
     hal::throw_fault(hal::FaultKind::soft_limit, std::string(what) + " " + text(ball) + " is outside the travel box " +
                                                      text(config_.machine.travel_box.min) + " – " +
                                                      text(config_.machine.travel_box.max));
@@ -361,7 +354,7 @@ void SimulatedMachine::select_tip(const std::string& tip_id) {
   active_ = tip_index(tip_id);  // the reference point stays; the reported position follows the tip
 }
 
-void SimulatedMachine::record_qualification(const std::string& tip_id, const hal::TipQualification& q) {
+void SimulatedMachine::record_qualification(const std::string& tip_id, const description::TipQualification& q) {
   std::lock_guard lock(mutex_);
   Tip& t = tips_[tip_index(tip_id)];
   t.info.ball_radius_mm = q.ball_radius_mm;

@@ -13,7 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "hal/machine_info.hpp"
+#include "hal/description/machine_description.hpp"
+#include "hal/machine_status.hpp"
 #include "hal/motion.hpp"
 #include "sim/scene.hpp"
 #include "sim/sim_config.hpp"
@@ -35,7 +36,7 @@ class SimulatedMachine {
  public:
   explicit SimulatedMachine(const SimConfig& config);
 
-  hal::MachineInfo info() const;
+  description::MachineDescription info() const;
   hal::MachineStatus status() const;  // lifecycle is the front's business and is left unset
 
   void home();
@@ -48,7 +49,7 @@ class SimulatedMachine {
   void abort();
   void reset();
   void select_tip(const std::string& tip_id);
-  void record_qualification(const std::string& tip_id, const hal::TipQualification& q);
+  void record_qualification(const std::string& tip_id, const description::TipQualification& q);
 
   // Truth, which no driver can see: the scene, and where the active tip's ball would first touch it
   // on a search (its reported-frame centre, noise-free).
@@ -60,7 +61,7 @@ class SimulatedMachine {
 
  private:
   struct Tip {
-    hal::TipInfo info;  // nominal or recorded
+    description::StylusTip info;  // nominal or recorded
     double true_radius = 0;
     Vec3 true_offset = Vec3::Zero();
   };

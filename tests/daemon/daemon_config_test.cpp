@@ -1,12 +1,13 @@
-// cmmd.json's reader on what an operator may write by mistake: every problem is a hal::ConfigError
-// naming its JSON Pointer, never another exception (which would end cmmd without saying where).
+// cmmd.json's reader on what an operator may write by mistake: every problem is a
+// description::FieldError naming its JSON Pointer, never another exception (which would end cmmd
+// without saying where).
 #include "daemon/daemon_config.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
-#include "hal/config_block.hpp"
+#include "hal/description/json_fields.hpp"
 
 namespace cmm::daemon {
 namespace {
@@ -16,8 +17,8 @@ using nlohmann::json;
 std::vector<std::string> problems_of(const json& config) {
   try {
     daemon_config_from_json(config, "cmmd.json", ".");
-  } catch (const hal::ConfigError& e) {
-    return e.problems();
+  } catch (const description::FieldError& e) {
+    return e.lines();
   }
   return {};
 }
@@ -42,7 +43,7 @@ TEST(DaemonConfig, AnUnknownDriverIsAProblemListingTheKnownOnes) {
 }
 
 TEST(DaemonConfig, SerialIsTheGrblDriverAndNoDriverIsTheSimulator) {
-  EXPECT_EQ(daemon_config_from_json({{"machine", {{"driver", "serial"}, {"port", "/dev/ttyUSB0"}}}}, "cmmd.json", ".").driver,
+  EXPECT_EQ(daemon_config_from_json({{"machine", {{"driver", "serial"}, {"device", "/dev/ttyUSB0"}}}}, "cmmd.json", ".").driver,
             "grbl");
   EXPECT_EQ(daemon_config_from_json({{"machine", json::object()}}, "cmmd.json", ".").driver, "sim");
 }

@@ -10,13 +10,13 @@
 namespace cmm::daemon {
 namespace {
 
-hal::TipInfo tip(double radius, const hal::Vec3& offset, const char* qualified_utc) {
-  hal::TipInfo t;
+description::StylusTip tip(double radius, const hal::Vec3& offset, const char* qualified_utc) {
+  description::StylusTip t;
   t.id = "T1";
   t.ball_radius_mm = radius;
   t.offset = offset;
   if (qualified_utc != nullptr) {
-    hal::TipQualification q;
+    description::TipQualification q;
     q.ball_radius_mm = radius;
     q.offset = offset;
     q.residual_rms_mm = 0.0004;

@@ -9,7 +9,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "daemon/atomic_file.hpp"
+#include "geometry/atomic_file.hpp"
 #include "fresh_folder.hpp"
 #include "geometry/file_error.hpp"
 #include "killed_writer.hpp"
@@ -180,7 +180,7 @@ TEST(JobStore, AProcessKilledWhileCreatingAndSavingLeavesARecoverableStore) {
             r.progress = {"probing", done, 3, 0};
             store.save(r);
             // Replaced whole: a kill between truncating and writing it would read as nothing reported.
-            write_atomically(reported, std::to_string(r.id) + " " + std::to_string(done));
+            geometry::write_atomically(reported, std::to_string(r.id) + " " + std::to_string(done));
           }
         }
       },

@@ -13,7 +13,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "daemon/atomic_file.hpp"
+#include "geometry/atomic_file.hpp"
 #include "daemon/base64.hpp"
 #include "daemon/job_store.hpp"
 #include "daemon/model_store.hpp"
@@ -128,9 +128,9 @@ TEST(StorageFull, AnAtomicWriteThatDoesNotFitLeavesTheOldFileAndNoTempFile) {
   test::SmallTmpfs disk(fresh_folder("full-atomic") / "disk", 1 << 20);
   MOUNT_OR_SKIP(disk);
   const fs::path file = disk.dir() / "result.json";
-  write_atomically(file, "old");
+  geometry::write_atomically(file, "old");
   disk.fill();
-  const geometry::FileError e = enospc_of([&] { write_atomically(file, std::string(64 * 1024, 'n')); });
+  const geometry::FileError e = enospc_of([&] { geometry::write_atomically(file, std::string(64 * 1024, 'n')); });
   EXPECT_EQ(e.file(), file);
   EXPECT_EQ(read_all(file), "old");
   EXPECT_EQ(names_in(disk.dir()), (std::vector<std::string>{"filler", "result.json"}));

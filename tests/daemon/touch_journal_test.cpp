@@ -9,7 +9,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "daemon/atomic_file.hpp"
+#include "geometry/atomic_file.hpp"
 #include "fresh_folder.hpp"
 #include "geometry/file_error.hpp"
 #include "killed_writer.hpp"
@@ -110,23 +110,6 @@ TEST(TouchJournal, AProcessKilledMidAppendLosesNoReportedTouch) {
   for (std::size_t i = 0; i < r.entries.size(); ++i) {
     ASSERT_EQ(r.entries[i].touch_id, static_cast<int>(i)) << "a gap or a repeat";
     EXPECT_EQ(r.entries[i].result.centre, entry(static_cast<int>(i)).result.centre);
-  }
-}
-
-TEST(AtomicFile, ReplacesWholeAndLeavesNoTempFile) {
-  const fs::path dir = fresh_folder("atomic");
-  const fs::path file = dir / "result.json";
-  write_atomically(file, "first");
-  write_atomically(file, "second, longer");
-  std::ifstream in(file);
-  std::string text((std::istreambuf_iterator<char>(in)), {});
-  EXPECT_EQ(text, "second, longer");
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
-  try {
-    write_atomically(dir / "no" / "such" / "folder.json", "x");
-    FAIL() << "wrote into a folder that does not exist";
-  } catch (const geometry::FileError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("folder.json"));
   }
 }
 

@@ -31,8 +31,8 @@ void refusing_with(F&& f) {
 }
 
 // The bytes as a file reader of the project would parse them (read_machine, read_plate,
-// read_registration, read_daemon_config: json::parse, every json::exception a FileError or
-// ConfigError); nullopt where that reader refuses, so the harness goes on only with JSON.
+// read_registration, read_daemon_config: json::parse, every json::exception a FieldError);
+// nullopt where that reader refuses, so the harness goes on only with JSON.
 inline std::optional<nlohmann::json> json_of(std::string_view text) {
   nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
   if (j.is_discarded()) return std::nullopt;

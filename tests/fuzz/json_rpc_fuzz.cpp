@@ -60,7 +60,7 @@ struct Harness {
     dispatcher.add("registration.fit", {Role::observer, Work::blocking, [this](const json& p, RpcContext&) {
                      try {
                        json input = p;
-                       if (!input.contains("plate")) input["plate"] = cmm::planner::to_json(config.plate);
+                       if (!input.contains("plate")) input["plate"] = cmm::description::to_json(config.plate);
                        return cmm::planner::to_json(
                            cmm::planner::fit_registration(cmm::planner::registration_from_json(input, "registration.fit")));
                      } catch (const cmm::planner::RegistrationError& e) {

@@ -44,7 +44,8 @@ std::string render(const std::string& format, const std::vector<Record>& records
       if (format == "ascii") {
         std::ostringstream text;
         text << v.value;
-        out += (&v == &record.front() ? "" : " ") + text.str();
+        if (&v != &record.front()) out += ' ';
+        out += text.str();
         continue;
       }
       switch (v.type) {

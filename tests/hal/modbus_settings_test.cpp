@@ -6,7 +6,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "hal/config_block.hpp"
+#include "hal/description/json_fields.hpp"
 
 namespace cmm::hal {
 namespace {
@@ -22,9 +22,9 @@ TEST(ModbusSettings, DefaultsAndEveryBadKey) {
   try {
     modbus_settings_from_json({{"transport", "rtu"}, {"port", 0}, {"heartbeat_s", 2}, {"heartbeat_timeout_s", 1},
                                {"parity", "X"}, {"speed", 9600}});
-    FAIL() << "no ConfigError";
-  } catch (const ConfigError& e) {
-    EXPECT_THAT(e.problems(), UnorderedElementsAre(HasSubstr("/port: must be in [1, 65535]"),
+    FAIL() << "no FieldError";
+  } catch (const description::FieldError& e) {
+    EXPECT_THAT(e.lines(), UnorderedElementsAre(HasSubstr("/port: must be an integer in [1, 65535]"),
                                                    HasSubstr("/parity: must be one of E, N, O"),
                                                    HasSubstr("/device: the serial device is required"),
                                                    HasSubstr("/heartbeat_s: must be shorter"),

@@ -71,7 +71,7 @@ TEST(ModbusStatus, DecodesATipEntry) {
   put_ascii(at(address("tip_id")), 4, "T2");
   put_u32(at(address("tip_radius")), 2'499'000);
   put_i32(at(address("tip_offset_z")), -3'000);
-  TipInfo tip = decode_tip(e);
+  description::StylusTip tip = decode_tip(e);
   EXPECT_EQ(tip.id, "T2");
   EXPECT_DOUBLE_EQ(tip.ball_radius_mm, 2.499);
   EXPECT_DOUBLE_EQ(tip.offset.z(), -0.003);

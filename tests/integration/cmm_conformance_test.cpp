@@ -91,20 +91,12 @@ struct GrblPath {
         CMMD_BINARY_DIR "/sim/cmm-sim", "--config", file.string(), "--port", "0", "--grbl-device", a.string()});
     const auto ready = nlohmann::json::parse(sim->read_line(60));
     if (!ready.value("ready", false)) throw std::runtime_error("cmm-sim did not come up");
+    // The driver knows the machine by the same description the simulator was given.
     const auto machine = sim::sim_config_from_json(config, CMMD_SOURCE_DIR).machine;
-    nlohmann::json tips = nlohmann::json::array();
-    for (const auto& t : machine.tips)
-      tips.push_back({{"id", t.id}, {"ball_radius_mm", t.ball_radius_mm}, {"offset", {t.offset.x(), t.offset.y(), t.offset.z()}}});
-    auto v = [](const Vec3& p) { return nlohmann::json{p.x(), p.y(), p.z()}; };
     cmm = std::make_unique<hal::GrblCmm>();
     cmm->configure({{"driver", "grbl"}, {"device", b.string()}, {"reset_on_open", false},
                     {"response_timeout_s", config.value("timeout_s", 5.0)}, {"status_timeout_s", 0.5},
-                    {"poll_interval_s", 0.002},
-                    {"travel_box", {{"min", v(machine.travel_box.min)}, {"max", v(machine.travel_box.max)}}},
-                    {"max_speed_mm_s", machine.max_speed_mm_s}, {"max_accel_mm_s2", machine.max_accel_mm_s2},
-                    {"probe_speed_mm_s", machine.probe_speed_mm_s}, {"tips", tips}, {"active_tip", machine.active_tip},
-                    {"reference_sphere", {{"centre", v(machine.reference_sphere.centre)},
-                                          {"radius_mm", machine.reference_sphere.radius_mm}}}});
+                    {"poll_interval_s", 0.002}, {"machine", description::to_json(machine)}});
     cmm->connect();
     cmm->enable();
     return *cmm;
@@ -326,12 +318,12 @@ TYPED_TEST(CmmConformance, QualificationFindsTheTrueTip) {
                               {"offset_error", {offset_error.x(), offset_error.y(), offset_error.z()}}};
   hal::Cmm& cmm = this->open({{"true_tips", {{"T1", true_tip}}}});
   cmm.home();
-  hal::TipQualification q = hal::qualify(cmm, "T1");
+  description::TipQualification q = hal::qualify(cmm, "T1");
   EXPECT_EQ(q.touches, 9);
   EXPECT_NEAR(q.ball_radius_mm, 0.9985, 0.003);
   EXPECT_LT((q.offset - offset_error).norm(), 0.004);
   EXPECT_LT(q.residual_rms_mm, 3 * kSigma);
-  hal::MachineInfo info = cmm.info();
+  description::MachineDescription info = cmm.info();
   ASSERT_TRUE(info.tips.front().qualification.has_value());
   EXPECT_EQ(info.tips.front().qualification->time_utc.size(), 20u);  // 2026-11-24T12:00:00Z
   EXPECT_NEAR(info.tips.front().ball_radius_mm, q.ball_radius_mm, 1e-6);  // wires carry nanometres

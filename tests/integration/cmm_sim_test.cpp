@@ -24,9 +24,7 @@ TEST(CmmSim, ServesGrblOnItsOwnPtyAndExitsCleanlyOnSigterm) {
 
   {
     hal::GrblCmm cmm;
-    cmm.configure({{"driver", "grbl"}, {"device", pty}, {"reset_on_open", false},
-                   {"travel_box", {{"min", {-100, -100, -50}}, {"max", {700, 900, 450}}}},
-                   {"tips", {{{"id", "T1"}, {"ball_radius_mm", 1.0}}}}});
+    cmm.configure({{"driver", "grbl"}, {"device", pty}, {"reset_on_open", false}});  // the default machine
     cmm.connect();
     cmm.enable();
     EXPECT_FALSE(cmm.status().homed);

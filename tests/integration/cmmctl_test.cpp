@@ -23,10 +23,10 @@ const std::string kCmmctl = CMMD_BINARY_DIR "/daemon/cmmctl";
 std::filesystem::path given_corners(const std::filesystem::path& scan_folder) {
   const json measure = testing::sample_measure_plate(scan_folder).at("measure_plate");
   const sim::SimConfig truth = sim::sim_config_from_json(testing::sample_sim_block());
-  const planner::Plate plate = sim::default_plate();
+  const description::Plate plate = description::default_plate();
   json corners = json::array();
   for (const json& c : measure.at("scan_corners")) {
-    const planner::Vec3 m = truth.T_M_P * plate.corner(c.at("id").get<int>());
+    const Eigen::Vector3d m = truth.T_M_P * plate.corner(c.at("id").get<int>());
     corners.push_back({{"id", c["id"]}, {"scan", c["scan"]}, {"machine", {m.x(), m.y(), m.z()}}});
   }
   const std::filesystem::path file = scan_folder / "given_corners.json";

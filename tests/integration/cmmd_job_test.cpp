@@ -9,6 +9,7 @@
 
 #include "child_process.hpp"
 #include "cmmd_instance.hpp"
+#include "job_watch.hpp"
 #include "daemon/model_upload.hpp"
 #include "daemon/rpc_error.hpp"
 #include "geometry/analytic_parts.hpp"
@@ -160,8 +161,14 @@ TEST(CmmdJob, AResumeThatCannotLeaveTheTouchInProgressHoldsTheJobInsteadOfMoving
   const auto line_file = cmmd.folder() / "state" / "touch_in_progress.json";
   ASSERT_TRUE(std::filesystem::exists(line_file));
 
+  // The next hold is awaited as it is announced: right after job.resume, job.get may still show
+  // the old one (the worker has not taken the job up yet).
+  daemon::RpcClient watch = cmmd.client();
+  watch.call("server.subscribe", {{"topics", {"job"}}});
   client.call("job.resume", {{"job", id}});
-  const json stuck = testing::wait_for_job(client, id, {"paused"}, 600);
+  testing::await_job(watch, id, "the hold after the resume", testing::job_state_is(id, "paused"), 600,
+                     testing::job_ended);
+  const json stuck = client.call("job.get", {{"job", id}});
   ASSERT_FALSE(stuck["fault"].is_null()) << stuck.dump();
   EXPECT_EQ(stuck["fault"]["kind"], "Safety") << stuck.dump();
   EXPECT_NE(stuck["reason"].get<std::string>().find("could not leave the touch"), std::string::npos) << stuck.dump();

@@ -381,7 +381,7 @@ TEST(CmmdLifecycle, ABadConfigExitsTwoNamingEveryProblemAndCheckValidatesWithout
   }
   const auto torn = cmm::test::run_command(kCmmd + " --check --config " + (dir / "not_json.json").string());
   EXPECT_EQ(torn.exit_code, 2) << torn.output;
-  EXPECT_NE(torn.output.find("not JSON"), std::string::npos) << torn.output;
+  EXPECT_NE(torn.output.find("not valid JSON"), std::string::npos) << torn.output;
 
   // A good config: --check says so and exits without creating the state folder or the socket.
   CmmdInstance good(dir / "good", {{"driver", "sim"}});
@@ -432,7 +432,7 @@ TEST(CmmdLifecycle, SighupAppliesNewTokensAndLogLevelAndABrokenFileKeepsCmmdRunn
   reload();
   const std::string refused = log_line_containing(cmmd.process(), "SIGHUP: ", 10);
   EXPECT_NE(refused.find("refused, running on"), std::string::npos) << refused;
-  EXPECT_NE(refused.find("not JSON"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("not valid JSON"), std::string::npos) << refused;
   RpcClient after = cmmd.tcp_client();
   EXPECT_EQ(after.call("server.auth", {{"token", new_operator}})["role"], "operator");
   EXPECT_EQ(cmmd.client().call("server.info")["name"], "cmmd");

@@ -36,9 +36,7 @@ TEST(GrblReconnect, ALineLeftRunningByAFrozenMachineIsStoppedAndItsOkNotTakenFor
 
   hal::GrblCmm cmm;
   cmm.configure({{"driver", "grbl"}, {"device", driver_end}, {"reset_on_open", false}, {"status_timeout_s", 0.3},
-                 {"response_timeout_s", 0.5}, {"poll_interval_s", 0.005},
-                 {"travel_box", {{"min", {-100, -100, -50}}, {"max", {700, 900, 450}}}}, {"max_speed_mm_s", 200},
-                 {"max_accel_mm_s2", 1000}, {"tips", {{{"id", "T1"}, {"ball_radius_mm", 1.0}}}}});
+                 {"response_timeout_s", 0.5}, {"poll_interval_s", 0.005}});  // the default machine, as cmm-sim's
   cmm.connect();
   cmm.enable();
   cmm.home();

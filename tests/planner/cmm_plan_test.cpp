@@ -12,7 +12,7 @@
 #include <string>
 
 #include "dmis_checker.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 #include "tests/tools/run_command.hpp"
 
 namespace {
@@ -216,7 +216,7 @@ TEST_F(CmmPlan, PlateWithoutRegistrationIsRefused) {
 }
 
 TEST_F(CmmPlan, BadMachineDescriptionNamesTheField) {
-  nlohmann::json machine = cmm::planner::to_json(cmm::planner::default_machine());
+  nlohmann::json machine = cmm::description::to_json(cmm::description::default_machine());
   machine["max_speed_mm_s"] = -5;
   std::ofstream(path("machine.json")) << machine.dump();
   const CommandResult r = plan(CMMD_SOURCE_DIR "/config/samples/case3_block.ply", path("plan.json"),
@@ -234,7 +234,7 @@ TEST_F(CmmPlan, DmisOfTheProgramPassesTheStrictChecker) {
   std::ifstream in(path("plan.dmi"));
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   cmm::planner::testing::DmisCheckOptions options;
-  options.travel_box = cmm::planner::machine_from_json(load(path("plan.json"))["machine"]).travel_box;
+  options.travel_box = cmm::description::machine_from_json(load(path("plan.json"))["machine"]).travel_box;
   const auto result = cmm::planner::testing::check_dmis(text, options);
   EXPECT_TRUE(result.ok()) << result;
   EXPECT_NE(text.find("SNSDEF"), std::string::npos);

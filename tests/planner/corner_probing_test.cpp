@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "planner/corner_probing.hpp"
+#include "planner/plate_pose.hpp"
 #include "planner/registration.hpp"
 
 namespace cmm::planner {
@@ -39,8 +40,8 @@ Eigen::Isometry3d pose(double turn_rad, double tilt_rad, const Vec3& translation
 // The true plate: a convex prism over its outline (the chamfer cut off), plus the fiducial hole.
 class TruePlate {
  public:
-  TruePlate(const Plate& plate, const Eigen::Isometry3d& T_M_P) : plate_(plate), T_M_P_(T_M_P) {
-    const bool chamfer = plate.fiducial.kind == PlateFiducial::Kind::chamfer;
+  TruePlate(const description::Plate& plate, const Eigen::Isometry3d& T_M_P) : plate_(plate), T_M_P_(T_M_P) {
+    const bool chamfer = plate.fiducial.kind == description::PlateFiducial::Kind::chamfer;
     for (int id = 1; id <= plate.corner_count(); ++id) {
       const Vec3& c = plate.corner(id);
       if (chamfer && plate.fiducial.corner == id) {
@@ -64,7 +65,7 @@ class TruePlate {
   std::optional<Contact> touch(const Touch& t, double r, double limit = 1e3) const {
     const Eigen::Isometry3d T_P_M = T_M_P_.inverse();
     const Vec3 start = T_P_M * t.start, dir = T_P_M.linear() * t.direction;
-    if (plate_.fiducial.kind == PlateFiducial::Kind::hole && t.target == TouchTarget::fiducial) {
+    if (plate_.fiducial.kind == description::PlateFiducial::Kind::hole && t.target == TouchTarget::fiducial) {
       // Inside the hole's wall: the centre stays R − r from the axis.
       const Eigen::Vector2d p0 = start.head<2>() - plate_.fiducial.centre, v = dir.head<2>();
       const double rho = plate_.fiducial.diameter_mm / 2 - r;
@@ -130,7 +131,7 @@ class TruePlate {
     return std::hypot(outside, vertical);
   }
 
-  const Plate& plate_;
+  const description::Plate& plate_;
   Eigen::Isometry3d T_M_P_;
   std::vector<Vec3> outline_;
   double top_ = 0, bottom_ = 0;
@@ -141,7 +142,7 @@ struct Probed {
   std::vector<Vec3> centres;
 };
 
-Probed probe(const Plate& plate, const Eigen::Isometry3d& rough, const TruePlate& truth,
+Probed probe(const description::Plate& plate, const Eigen::Isometry3d& rough, const TruePlate& truth,
              const CornerProbingOptions& options, bool require_within_travel = true) {
   Probed p;
   p.touches = plan_corner_touches(plate, rough, options);
@@ -169,7 +170,7 @@ const Eigen::Isometry3d kTruth = pose(0.35, 0.004, Vec3(412.5, 233.25, -187.75))
 const Eigen::Isometry3d kRough = pose(0.35 + 0.2 * std::numbers::pi / 180, 0.0, Vec3(412.9, 232.85, -187.5));
 
 TEST(CornerProbing, TouchesAreWellFormed) {
-  const Plate plate = plate_from_json(plate_json(false));
+  const description::Plate plate = description::plate_from_json(plate_json(false));
   const CornerProbingOptions o = options();
   const std::vector<Touch> touches = plan_corner_touches(plate, kRough, o, 100);
   ASSERT_EQ(touches.size(), 4u * 9 + 3);
@@ -199,7 +200,7 @@ TEST(CornerProbing, TouchesAreWellFormed) {
 }
 
 TEST(CornerProbing, RecoversThePerfectPlatesCornersAndChamfer) {
-  const Plate plate = plate_from_json(plate_json(false));
+  const description::Plate plate = description::plate_from_json(plate_json(false));
   const TruePlate truth(plate, kTruth);
   const CornerProbingOptions o = options();
   const Probed p = probe(plate, kRough, truth, o);
@@ -218,7 +219,7 @@ TEST(CornerProbing, RecoversThePerfectPlatesCornersAndChamfer) {
   }
   const Eigen::Isometry3d fitted = fit_plate_pose(plate, ids, measured);
   const FiducialFit f = locate_fiducial(plate, fitted, p.touches, p.centres, o);
-  const FiducialDeviation d = fiducial_deviation(plate, kTruth.inverse() * f.point);
+  const description::FiducialDeviation d = description::fiducial_deviation(plate, kTruth.inverse() * f.point);
   EXPECT_LT(d.off_mm, 1e-9);
   EXPECT_EQ(d.outside_mm, 0);
 
@@ -233,7 +234,7 @@ TEST(CornerProbing, RecoversThePerfectPlatesCornersAndChamfer) {
 }
 
 TEST(CornerProbing, LocatesAHoleFiducial) {
-  const Plate plate = plate_from_json(plate_json(true));
+  const description::Plate plate = description::plate_from_json(plate_json(true));
   const TruePlate truth(plate, kTruth);
   const CornerProbingOptions o = options();
   const Probed p = probe(plate, kRough, truth, o);
@@ -253,7 +254,7 @@ TEST(CornerProbing, LocatesAHoleFiducial) {
   const FiducialFit f = locate_fiducial(plate, fit_plate_pose(plate, ids, measured), p.touches, p.centres, o);
   EXPECT_NEAR(f.diameter_mm, 6, 1e-9);
   EXPECT_LT(f.rms_mm, 1e-9);
-  const FiducialDeviation d = fiducial_deviation(plate, kTruth.inverse() * f.point);
+  const description::FiducialDeviation d = description::fiducial_deviation(plate, kTruth.inverse() * f.point);
   EXPECT_LT(d.off_mm, 1e-9);
   EXPECT_EQ(d.outside_mm, 0);
 }
@@ -261,7 +262,7 @@ TEST(CornerProbing, LocatesAHoleFiducial) {
 TEST(CornerProbing, CornersLabelledFromTheOppositeCornerAreRefusedAtTheFiducial) {
   // The operator's rough corners start at corner 3: the rough pose is turned by 180°. The corner
   // touches still meet true faces; the chamfer's touches meet a plain corner's sides early.
-  const Plate plate = plate_from_json(plate_json(false));
+  const description::Plate plate = description::plate_from_json(plate_json(false));
   const TruePlate truth(plate, kTruth);
   const CornerProbingOptions o = options();
   std::vector<int> ids{1, 2, 3, 4};
@@ -290,7 +291,7 @@ TEST(CornerProbing, CornersLabelledFromTheOppositeCornerAreRefusedAtTheFiducial)
 }
 
 TEST(CornerProbing, RefusesTouchSetsThatCannotGiveACorner) {
-  const Plate plate = plate_from_json(plate_json(false));
+  const description::Plate plate = description::plate_from_json(plate_json(false));
   const TruePlate truth(plate, kTruth);
   const CornerProbingOptions o = options();
   Probed p = probe(plate, kRough, truth, o);
@@ -325,7 +326,7 @@ TEST(CornerProbing, RefusesAPlateTooThinOrAHoleTooSmallForTheBall) {
   json thin = plate_json(false);
   thin["thickness_mm"] = 3;
   try {
-    plan_corner_touches(plate_from_json(thin), kRough, options());
+    plan_corner_touches(description::plate_from_json(thin), kRough, options());
     ADD_FAILURE() << "no error";
   } catch (const RegistrationError& e) {
     EXPECT_THAT(e.what(), HasSubstr("the plate is 3.00 mm thick: too thin for three touches at two heights"));
@@ -333,7 +334,7 @@ TEST(CornerProbing, RefusesAPlateTooThinOrAHoleTooSmallForTheBall) {
   json small_hole = plate_json(true);
   small_hole["fiducial"]["diameter_mm"] = 2;
   try {
-    plan_corner_touches(plate_from_json(small_hole), kRough, options());
+    plan_corner_touches(description::plate_from_json(small_hole), kRough, options());
     ADD_FAILURE() << "no error";
   } catch (const RegistrationError& e) {
     EXPECT_THAT(e.what(), HasSubstr("the fiducial hole (Ø2.00 mm) is too small for a Ø2.00 mm ball"));

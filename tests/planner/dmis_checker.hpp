@@ -8,13 +8,13 @@
 #include <string>
 #include <string_view>
 
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/move_program.hpp"
 
 namespace cmm::planner::testing {
 
 struct DmisCheckOptions {
-  std::optional<AxisBox> travel_box;  // every GOTO and every PTMEAS ball centre (xyz + r·ijk) inside
+  std::optional<description::TravelBox> travel_box;  // every GOTO and every PTMEAS ball centre (xyz + r·ijk) inside
   // When set: each PTMEAS is one of its touches (same surface point), measured once, with ijk =
   // −direction, reached from the touch's start under the planned SNSET/APPRCH and SEARCH; and every
   // touch is measured.

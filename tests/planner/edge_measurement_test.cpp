@@ -112,7 +112,7 @@ TEST_P(EdgeMeasurement, PlannedTouchesMeetTheTrueEdgeAndCompensationRecoversIt) 
   const geometry::TriangleMesh reference = geometry::with_gaussian_noise(c.make(1.0).mesh, 0.1, 20261124);
   const geometry::FeatureModel model = geometry::extract_features(reference);
   const geometry::BallSweeper true_part(truth.mesh), reference_part(reference);
-  MachineDescription machine = default_machine();
+  description::MachineDescription machine = description::default_machine();
   machine.tips.front().ball_radius_mm = c.radius;
   machine.tips.front().shaft_length_mm = 60;  // long enough to reach the foot of every wall
   TouchPlanOptions options;

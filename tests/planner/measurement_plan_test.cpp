@@ -16,7 +16,7 @@ TEST(MeasurementPlan, ACancelStopsPlanningAtItsNextStep) {
   geometry::FeatureModelOptions features;
   features.spacing = 1;
   const geometry::FeatureModel model = geometry::extract_features(mesh, features);
-  MachineDescription machine = default_machine();
+  description::MachineDescription machine = description::default_machine();
   Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
   T_M_S.translation() = Eigen::Vector3d(200, 200, 0);
   MeasurementPlanOptions options;

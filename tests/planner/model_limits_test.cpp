@@ -7,14 +7,16 @@
 
 #include "geometry/analytic_parts.hpp"
 #include "geometry/mesh_io.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 
 namespace cmm::planner {
 namespace {
 
+using geometry::Vec3;
+
 using ::testing::HasSubstr;
 
-std::string refusal(const geometry::TriangleMesh& mesh, const AxisBox& box, const ModelLimits& limits = {}) {
+std::string refusal(const geometry::TriangleMesh& mesh, const description::TravelBox& box, const ModelLimits& limits = {}) {
   try {
     check_model_limits(mesh, box, "part.stl (scale 1)", limits);
   } catch (const ModelRefused& e) {
@@ -24,7 +26,7 @@ std::string refusal(const geometry::TriangleMesh& mesh, const AxisBox& box, cons
 }
 
 TEST(ModelLimits, ThePartsOfTheTestsFitTheDefaultMachine) {
-  const AxisBox box = default_machine().travel_box;
+  const description::TravelBox box = description::default_machine().travel_box;
   for (const std::string& name : geometry::analytic_part_names())
     EXPECT_EQ(refusal(geometry::make_analytic_part(name, 2).mesh, box), "") << name;
 }
@@ -32,7 +34,7 @@ TEST(ModelLimits, ThePartsOfTheTestsFitTheDefaultMachine) {
 // Meshes nobody on the project made (tests/data: a CAD export, an open scanned blade) and a CAD
 // box of 12 triangles almost as large as the travel box: the gate must not refuse real parts.
 TEST(ModelLimits, RealMeshesAndAFewHugeTrianglesScaledToAPartFitTheDefaultMachine) {
-  const AxisBox box = default_machine().travel_box;
+  const description::TravelBox box = description::default_machine().travel_box;
   for (const char* name : {"fandisk.ply", "blade.ply"}) {
     geometry::TriangleMesh mesh = geometry::read_mesh(std::string(CMMD_TEST_DATA_DIR) + "/" + name);
     const double extent = (mesh.vertices.colwise().maxCoeff() - mesh.vertices.colwise().minCoeff()).maxCoeff();
@@ -48,14 +50,14 @@ TEST(ModelLimits, RealMeshesAndAFewHugeTrianglesScaledToAPartFitTheDefaultMachin
 TEST(ModelLimits, AStrayVertexIsNamedWithWhereItIs) {
   geometry::TriangleMesh cube = geometry::make_cube(40, 5).mesh;
   cube.vertices.row(17) << 2.6e6, 40, 40;  // 2.6 km away
-  const std::string why = refusal(cube, default_machine().travel_box);
+  const std::string why = refusal(cube, description::default_machine().travel_box);
   EXPECT_THAT(why, HasSubstr("part.stl (scale 1): the model spans"));
   EXPECT_THAT(why, HasSubstr("the farthest vertex is 17 at (2600000.000, 40.000, 40.000)"));
   EXPECT_THAT(why, HasSubstr("stray vertex"));
 }
 
 TEST(ModelLimits, SizesAreComparedNotPositions) {
-  const AxisBox box{Vec3(0, 0, 0), Vec3(300, 400, 0)};  // diagonal 500 mm
+  const description::TravelBox box{Vec3(0, 0, 0), Vec3(300, 400, 0)};  // diagonal 500 mm
   geometry::TriangleMesh rod = geometry::make_cube(10, 5).mesh;
   // Far from the box, and along an axis longer than any side: it fits along the diagonal.
   rod.vertices.col(0) = rod.vertices.col(0) * 49.0 + Eigen::VectorXd::Constant(rod.vertices.rows(), -1e5);
@@ -68,10 +70,10 @@ TEST(ModelLimits, CountsOverTheLimitsAreRefused) {
   const geometry::TriangleMesh block = geometry::make_case3_block(2).mesh;
   ModelLimits limits;
   limits.max_faces = static_cast<std::size_t>(block.faces.rows()) - 1;
-  EXPECT_THAT(refusal(block, default_machine().travel_box, limits), HasSubstr("triangles, more than the limit of"));
+  EXPECT_THAT(refusal(block, description::default_machine().travel_box, limits), HasSubstr("triangles, more than the limit of"));
   limits = {};
   limits.max_vertices = 10;
-  EXPECT_THAT(refusal(block, default_machine().travel_box, limits), HasSubstr("vertices, more than the limit of 10"));
+  EXPECT_THAT(refusal(block, description::default_machine().travel_box, limits), HasSubstr("vertices, more than the limit of 10"));
 }
 
 }  // namespace

@@ -58,7 +58,7 @@ std::unique_ptr<Scenario> make_scenario(const std::string& name, const std::func
   features.spacing = 4;
   s->model = geometry::extract_features(s->reference, features);
   s->T_M_S = testing::tilted_machine_pose();
-  MachineDescription machine = default_machine();
+  description::MachineDescription machine = description::default_machine();
   machine.tips.front().ball_radius_mm = kRadius;
   machine.tips.front().shaft_length_mm = 60;  // reaches the foot of the block's walls
   MeasurementPlanOptions options;

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "geometry/file_error.hpp"
+#include "hal/description/json_fields.hpp"
 #include "planner/registration.hpp"
 
 namespace cmm::planner {
@@ -48,7 +48,7 @@ json rectangle_json(double x = 200, double y = 150) {
 
 // The plate in S (the scanner's view of it) and in M, exactly.
 struct Scene {
-  Plate plate;
+  description::Plate plate;
   Eigen::Isometry3d T_S_P, T_M_S;
   Eigen::Isometry3d T_M_P() const { return T_M_S * T_S_P; }
 
@@ -60,13 +60,13 @@ struct Scene {
     }
     return in;
   }
-  Vec3 fiducial_M() const { return T_M_P() * fiducial_geometry(plate).point; }
-  Vec3 fiducial_S() const { return T_S_P * fiducial_geometry(plate).point; }
+  Vec3 fiducial_M() const { return T_M_P() * description::fiducial_geometry(plate).point; }
+  Vec3 fiducial_S() const { return T_S_P * description::fiducial_geometry(plate).point; }
 };
 
 Scene scene(const json& plate = rectangle_json()) {
   Scene s;
-  s.plate = plate_from_json(plate);
+  s.plate = description::plate_from_json(plate);
   // The plate 300-odd mm from the scanner's origin, so translation at the origin and at the centroid differ.
   s.T_S_P = Eigen::Isometry3d::Identity();
   s.T_S_P.linear() = Eigen::AngleAxisd(2.1, Vec3(0.3, 0.5, 1).normalized()).toRotationMatrix();
@@ -75,7 +75,7 @@ Scene scene(const json& plate = rectangle_json()) {
   return s;
 }
 
-std::string error_of(const RegistrationInput& input, const Plate* plate = nullptr,
+std::string error_of(const RegistrationInput& input, const description::Plate* plate = nullptr,
                      RegistrationError::Kind* kind = nullptr) {
   try {
     fit_registration(input, plate);
@@ -109,7 +109,7 @@ TEST(RigidFit, NoiseFreePairsGiveTheTransformExactly) {
 
 TEST(RigidFit, NoiseFreePlateCornersThroughTheRegistration) {
   std::mt19937_64 rng(5);
-  const Plate plate = plate_from_json(rectangle_json());
+  const description::Plate plate = description::plate_from_json(rectangle_json());
   for (int trial = 0; trial < 10; ++trial) {
     Scene s{plate, random_pose(rng), random_pose(rng)};
     for (const std::vector<int>& ids : {std::vector<int>{1, 2, 3}, std::vector<int>{1, 2, 3, 4}}) {
@@ -403,7 +403,7 @@ TEST(RegistrationRefuses, CornersShiftedByTwoWithAHoleFiducial) {
 TEST(RegistrationRefuses, AFiducialNoRelabellingExplains) {
   const Scene s = scene();
   RegistrationInput in = s.input();
-  const FiducialGeometry g = fiducial_geometry(s.plate);
+  const description::FiducialGeometry g = description::fiducial_geometry(s.plate);
   in.fiducial_machine = s.T_M_P() * (g.point - 2 * g.normal);  // 2 mm inside the chamfer
   EXPECT_THAT(error_of(in, &s.plate), HasSubstr("2.00 mm off the chamfer face's plane"));
   EXPECT_THAT(error_of(in, &s.plate), HasSubstr("no cyclic relabelling of the corners explains it"));
@@ -414,7 +414,7 @@ TEST(RegistrationRefuses, AFiducialNoRelabellingExplains) {
 TEST(Registration, AVerifiedFitReportsItsChecks) {
   const Scene s = scene();
   RegistrationInput in = s.input();
-  const FiducialGeometry g = fiducial_geometry(s.plate);
+  const description::FiducialGeometry g = description::fiducial_geometry(s.plate);
   in.fiducial_machine = s.T_M_P() * (g.point + 1.5 * g.along + Vec3(0, 0, 3));  // anywhere on the face
   in.fiducial_scan = s.fiducial_S();
   const RegistrationResult r = fit_registration(in, &s.plate);
@@ -491,10 +491,10 @@ class CornersFile : public ::testing::Test {
   std::string error_reading(const json& j) const {
     try {
       read_registration(write(j));
-    } catch (const geometry::FileError& e) {
+    } catch (const cmm::description::FieldError& e) {
       return e.what();
     }
-    return "(no FileError)";
+    return "(no FieldError)";
   }
 
   std::filesystem::path dir_;
@@ -537,31 +537,31 @@ TEST_F(CornersFile, ErrorsNameTheFileAndTheField) {
   json j = corners_json();
   j["corners"][1]["machine"] = {1, 2};
   std::string message = error_reading(j);
-  EXPECT_THAT(message, HasSubstr("corners.json: corners[1].machine: expected [x, y, z]"));
+  EXPECT_THAT(message, HasSubstr("corners.json: /corners/1/machine: must be [x, y, z], not [1,2]"));
 
   j = corners_json();
   j["corners"][2]["scan"][1] = "12";
-  EXPECT_THAT(error_reading(j), HasSubstr("corners.json: corners[2].scan.y: expected a number"));
+  EXPECT_THAT(error_reading(j), HasSubstr("corners.json: /corners/2/scan/1: must be a finite number"));
 
   j = corners_json();
   j["corners"][0].erase("id");
-  EXPECT_THAT(error_reading(j), HasSubstr("corners[0].id: expected an integer corner id"));
+  EXPECT_THAT(error_reading(j), HasSubstr("/corners/0/id: missing (an integer corner id)"));
 
   j = corners_json();
   j.erase("corners");
-  EXPECT_THAT(error_reading(j), HasSubstr("corners.json: corners: missing"));
+  EXPECT_THAT(error_reading(j), HasSubstr("corners.json: /corners: missing"));
 
   j = corners_json();
   j["rms_tolerance"] = 0.1;
-  EXPECT_THAT(error_reading(j), HasSubstr("corners.json: rms_tolerance: unknown field"));
+  EXPECT_THAT(error_reading(j), HasSubstr("corners.json: /rms_tolerance: unknown key"));
 
   j = corners_json();
   j["noise_mm"] = 0;
-  EXPECT_THAT(error_reading(j), HasSubstr("noise_mm: must be positive"));
+  EXPECT_THAT(error_reading(j), HasSubstr("/noise_mm: must be positive"));
 
   j = corners_json();
   j["fiducial"] = {{"machin", {1, 2, 3}}};
-  EXPECT_THAT(error_reading(j), HasSubstr("fiducial.machin: unknown field"));
+  EXPECT_THAT(error_reading(j), HasSubstr("/fiducial/machin: unknown key"));
 
   j = corners_json();
   j["plate"] = "no_such_plate.json";
@@ -570,14 +570,14 @@ TEST_F(CornersFile, ErrorsNameTheFileAndTheField) {
   j = corners_json();
   j["plate"]= rectangle_json();
   j["plate"]["thickness_mm"] = "ten";
-  EXPECT_THAT(error_reading(j), HasSubstr("corners.json: plate: thickness_mm: expected a number"));
+  EXPECT_THAT(error_reading(j), HasSubstr("corners.json: /plate/thickness_mm: must be a number"));
 
   std::ofstream(dir_ / "torn.json") << "{\"corners\": [{\"id\": 1,";
   try {
     read_registration(dir_ / "torn.json");
     ADD_FAILURE() << "no error";
-  } catch (const geometry::FileError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("torn.json: byte"));
+  } catch (const cmm::description::FieldError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("torn.json: not valid JSON at byte"));
   }
 }
 

@@ -6,7 +6,7 @@
 
 #include "geometry/analytic_parts.hpp"
 #include "geometry/ball_sweep.hpp"
-#include "planner/machine.hpp"
+#include "hal/description/machine_description.hpp"
 #include "planner/stylus_clearance.hpp"
 
 namespace cmm::planner {
@@ -14,7 +14,7 @@ namespace {
 
 class StylusClearanceOnACube : public ::testing::Test {
  protected:
-  StylusClearanceOnACube() : cube_(moved_cube()), sweeper_(cube_) { machine_ = default_machine(); }
+  StylusClearanceOnACube() : cube_(moved_cube()), sweeper_(cube_) { machine_ = description::default_machine(); }
 
   static geometry::TriangleMesh moved_cube() { return geometry::make_cube(40, 2).mesh; }
 
@@ -38,7 +38,7 @@ class StylusClearanceOnACube : public ::testing::Test {
 
   geometry::TriangleMesh cube_;
   geometry::BallSweeper sweeper_;
-  MachineDescription machine_;
+  description::MachineDescription machine_;
   double radius_ = 1;
 };
 

@@ -23,7 +23,7 @@ TEST(ScannedCompensation, EdgePointsFromAScannedReferenceMatchTheTruth) {
   features.spacing = 4;
   const geometry::FeatureModel model = geometry::extract_features(scanned.mesh, features);
   const Eigen::Isometry3d T_M_S = planner::testing::tilted_machine_pose();
-  planner::MachineDescription machine = planner::default_machine();
+  description::MachineDescription machine = description::default_machine();
   machine.tips.front().ball_radius_mm = radius;
   machine.tips.front().shaft_length_mm = 60;
   planner::MeasurementPlanOptions options;

@@ -1,20 +1,18 @@
 // The base plate the part sits on (plate.json): nominal corners in the plate's own frame P, its
-// thickness and the one asymmetric fiducial that tells corner 1 from the others.
+// thickness and the one asymmetric fiducial that tells corner 1 from the others; and the geometric
+// questions about the nominal plate that registration, corner probing and the simulator ask.
 #pragma once
 
 #include <filesystem>
-#include <span>
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "geometry/mesh.hpp"
+namespace cmm::description {
 
-namespace cmm::planner {
-
-using geometry::Vec3;
+using Vec3 = Eigen::Vector3d;
 
 // A rectangular plate's corners shifted cyclically by two agree on every length, so lengths cannot
 // settle the corner order; the fiducial can, because it sits at (or near) one corner only.
@@ -53,10 +51,14 @@ struct Plate {
 
 // Parses and checks a plate: at least three corners, finite, one top height, strictly convex and
 // counter-clockwise seen from +z, a positive thickness, and a fiducial that fits on the plate and
-// breaks its symmetry. Errors (geometry::FileError) name the source and the field.
+// breaks its symmetry. FieldError names the source and each bad field by its pointer.
 Plate plate_from_json(const nlohmann::json& j, const std::string& source = "<json>");
 Plate read_plate(const std::filesystem::path& file);
 nlohmann::json to_json(const Plate& plate);
+
+// config/plate.json, compiled in: the plate cmmd registers by and the simulator stands the part on
+// unless told otherwise.
+Plate default_plate();
 
 // Unit outward normal (P) of the side face from corner `id` to corner next(id).
 Vec3 side_normal(const Plate& plate, int id);
@@ -83,7 +85,4 @@ FiducialDeviation fiducial_deviation(const Plate& plate, const Vec3& point_P);
 // (corner i onto corner i+k): {2} for a rectangle, {1, 2, 3} for a square, {} for a general quad.
 std::vector<int> symmetry_shifts(const Plate& plate, double tolerance_mm = 1e-6);
 
-// Plate pose T_X_P (P into frame X) from measured corners: ids (1-based) and their positions in X.
-Eigen::Isometry3d fit_plate_pose(const Plate& plate, std::span<const int> ids, std::span<const Vec3> points_X);
-
-}  // namespace cmm::planner
+}  // namespace cmm::description

@@ -1,5 +1,6 @@
 // The plate description: config/plate.json reads back as the 200 × 150 × 10 mm plate with its chamfer,
-// its geometry answers are exact, and every broken description is refused naming the field.
+// its geometry answers are exact, and every broken description is refused naming the field by its
+// JSON Pointer.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -10,10 +11,10 @@
 #include <numbers>
 #include <string>
 
-#include "geometry/file_error.hpp"
-#include "planner/plate.hpp"
+#include "hal/description/json_fields.hpp"
+#include "hal/description/plate.hpp"
 
-namespace cmm::planner {
+namespace cmm::description {
 namespace {
 
 using ::testing::ElementsAre;
@@ -29,10 +30,10 @@ json rectangle(double x = 200, double y = 150) {
 std::string error_of(const json& j) {
   try {
     plate_from_json(j, "plate.json");
-  } catch (const geometry::FileError& e) {
+  } catch (const FieldError& e) {
     return e.what();
   }
-  return "(no FileError)";
+  return "(no FieldError)";
 }
 
 TEST(Plate, ConfigExampleIsTheChamferedRectangle) {
@@ -117,18 +118,6 @@ TEST(Plate, SymmetryShifts) {
   EXPECT_TRUE(symmetry_shifts(plate_from_json(trapezoid)).empty());
 }
 
-TEST(Plate, PoseFromMeasuredCorners) {
-  const Plate plate = plate_from_json(rectangle());
-  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
-  truth.linear() = Eigen::AngleAxisd(0.7, Vec3(0.1, -0.2, 1).normalized()).toRotationMatrix();
-  truth.translation() = Vec3(310, -45, 120);
-  std::vector<int> ids{4, 1, 2};
-  std::vector<Vec3> measured;
-  for (int id : ids) measured.push_back(truth * plate.corner(id));
-  const Eigen::Isometry3d pose = fit_plate_pose(plate, ids, measured);
-  EXPECT_NEAR((pose.matrix() - truth.matrix()).norm(), 0, 1e-9);
-}
-
 TEST(Plate, RefusesBrokenDescriptionsNamingTheField) {
   json j = rectangle();
   j["corners"] = {{0, 0, 0}, {0, 150, 0}, {200, 150, 0}, {200, 0, 0}};
@@ -140,47 +129,47 @@ TEST(Plate, RefusesBrokenDescriptionsNamingTheField) {
 
   j = rectangle();
   j["corners"][2] = {200, 150, 1};
-  EXPECT_THAT(error_of(j), HasSubstr("plate.json: corners[2].z: every corner lies on the top face"));
+  EXPECT_THAT(error_of(j), HasSubstr("plate.json: /corners/2: every corner lies on the top face"));
 
   j = rectangle();
   j["corners"] = {{0, 0, 0}, {200, 0, 0}};
-  EXPECT_THAT(error_of(j), HasSubstr("corners: expected an array of at least three corners"));
+  EXPECT_THAT(error_of(j), HasSubstr("/corners: must hold at least three corners"));
 
   j = rectangle();
   j["corners"][1] = {200, "x", 0};
-  EXPECT_THAT(error_of(j), HasSubstr("corners[1].y: expected a number"));
+  EXPECT_THAT(error_of(j), HasSubstr("/corners/1/1: must be a finite number"));
 
   j = rectangle();
   j.erase("thickness_mm");
-  EXPECT_THAT(error_of(j), HasSubstr("thickness_mm: missing"));
+  EXPECT_THAT(error_of(j), HasSubstr("/thickness_mm: missing"));
 
   j = rectangle();
   j["thickness_mm"] = -1;
-  EXPECT_THAT(error_of(j), HasSubstr("thickness_mm: must be positive"));
+  EXPECT_THAT(error_of(j), HasSubstr("/thickness_mm: must be positive"));
 
   j = rectangle();
   j["thicknes_mm"] = 10;
-  EXPECT_THAT(error_of(j), HasSubstr("thicknes_mm: unknown field"));
+  EXPECT_THAT(error_of(j), HasSubstr("/thicknes_mm: unknown key"));
 
   j = rectangle();
   j.erase("fiducial");
-  EXPECT_THAT(error_of(j), HasSubstr("fiducial: missing"));
+  EXPECT_THAT(error_of(j), HasSubstr("/fiducial: missing"));
 
   j = rectangle();
   j["fiducial"]["kind"] = "notch";
-  EXPECT_THAT(error_of(j), HasSubstr("\"notch\" is not a fiducial kind"));
+  EXPECT_THAT(error_of(j), HasSubstr("/fiducial/kind: must be one of chamfer, hole, not \"notch\""));
 
   j = rectangle();
   j["fiducial"]["corner"] = 5;
-  EXPECT_THAT(error_of(j), HasSubstr("fiducial.corner: 5 is not a corner id"));
+  EXPECT_THAT(error_of(j), HasSubstr("/fiducial/corner: 5 is not a corner id"));
 
   j = rectangle();
   j["fiducial"]["size_mm"] = 80;
-  EXPECT_THAT(error_of(j), HasSubstr("fiducial.size_mm: 80.00 mm is more than half the shortest side"));
+  EXPECT_THAT(error_of(j), HasSubstr("/fiducial/size_mm: 80.00 mm is more than half the shortest side"));
 
   j = rectangle();
   j["fiducial"] = {{"kind", "hole"}, {"centre", {2, 15}}, {"diameter_mm", 6}};
-  EXPECT_THAT(error_of(j), HasSubstr("fiducial.centre: the hole does not fit inside the plate"));
+  EXPECT_THAT(error_of(j), HasSubstr("/fiducial/centre: the hole does not fit inside the plate"));
 
   j = rectangle();
   j["fiducial"] = {{"kind", "hole"}, {"centre", {100, 75}}, {"diameter_mm", 6}};  // the rectangle's centre
@@ -188,7 +177,7 @@ TEST(Plate, RefusesBrokenDescriptionsNamingTheField) {
 
   j = rectangle();
   j["fiducial"] = {{"kind", "hole"}, {"centre", {20, 15}}, {"diameter_mm", 6}, {"depth_mm", 12}};
-  EXPECT_THAT(error_of(j), HasSubstr("fiducial.depth_mm: 12.00 mm is deeper than the plate"));
+  EXPECT_THAT(error_of(j), HasSubstr("/fiducial/depth_mm: 12.00 mm is deeper than the plate"));
 }
 
 TEST(Plate, ReadErrorsNameTheFile) {
@@ -199,18 +188,17 @@ TEST(Plate, ReadErrorsNameTheFile) {
   try {
     read_plate(broken);
     ADD_FAILURE() << "no error";
-  } catch (const geometry::FileError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("broken.json: byte"));
-    EXPECT_THAT(e.what(), HasSubstr("not valid JSON"));
+  } catch (const FieldError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("broken.json: not valid JSON at byte"));
   }
   try {
     read_plate(dir / "missing.json");
     ADD_FAILURE() << "no error";
-  } catch (const geometry::FileError& e) {
+  } catch (const FieldError& e) {
     EXPECT_THAT(e.what(), HasSubstr("missing.json: cannot open"));
   }
   std::filesystem::remove_all(dir);
 }
 
 }  // namespace
-}  // namespace cmm::planner
+}  // namespace cmm::description

@@ -1,0 +1,36 @@
+// The one durable writer (DESIGN.md, Files): a file is replaced so that a crash at any moment leaves
+// either the old file or the new one, never half of one — temp file, fsync, rename, fsync of the
+// folder; and the two variants cmmd's state needs, a record written into space kept aside for it and
+// a chunk written at an offset. Every failure is a FileError with the errno of the call that failed,
+// so a full disk (ENOSPC, EDQUOT) can be told from a broken one.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string_view>
+
+namespace cmm::geometry {
+
+// Replaces `file` with `content`. On failure the old file, if any, is untouched and no temp file is
+// left behind.
+void write_atomically(const std::filesystem::path& file, std::string_view content);
+
+// The same through `spare`, a file in the same folder whose blocks are already allocated
+// (allocate_spare): `content` is written into them and the spare renamed over `file`, so no new
+// space is needed — a state record still saves on a full disk. False (nothing changed but the spare,
+// which is then gone) when the spare is missing, too small or cannot be written: the caller writes
+// atomically instead.
+bool write_through_spare(const std::filesystem::path& file, const std::filesystem::path& spare,
+                         std::string_view content, std::size_t spare_bytes);
+// Allocates `bytes` for `spare` if it is missing; false when there is no room (no half spare is kept).
+bool allocate_spare(const std::filesystem::path& spare, std::size_t bytes);
+
+// Writes `bytes` at `offset` of `file` (created if missing), cutting whatever lay beyond, and makes
+// it durable. On failure the file is cut back to `offset`: it holds exactly what it held before
+// this chunk, so nothing half written is ever counted as received.
+void write_chunk(const std::filesystem::path& file, std::uint64_t offset, std::string_view bytes);
+
+// fsync of a folder, so that a rename or a new file in it survives a power cut.
+void sync_folder(const std::filesystem::path& folder);
+
+}  // namespace cmm::geometry
