@@ -63,10 +63,9 @@ void JobRunner::check_control() const {
 }
 
 // One touch, its search line recorded first so that whoever moves next after a stop leaves along it.
-hal::TouchResult JobRunner::touch(const planner::Touch& t, double clearance_z, double probe_speed_mm_s) {
+hal::TouchResult JobRunner::touch(const planner::Touch& t, std::span<const planner::Motion> motions) {
   env_.machine.enter_touch({t.start, t.direction});
-  const hal::TouchResult r =
-      run_touch(env_.machine.cmm(), t, clearance_z, {0, probe_speed_mm_s}, [this] { check_stop(); });
+  const hal::TouchResult r = run_motions(env_.machine.cmm(), motions, [this] { check_stop(); });
   env_.machine.left_touch();
   return r;
 }
@@ -107,13 +106,15 @@ JobRunner::Registration JobRunner::measure_plate(double radius_mm) {
   const std::vector<planner::Touch> touches = planner::plan_corner_touches(plate, rough, options);
   const description::MachineDescription& d = env_.config.description;
   std::vector<planner::Vec3> centres;
+  hal::Vec3 at = env_.machine.cmm().status().position;
   for (std::size_t i = 0; i < touches.size(); ++i) {
     check_control();
     if (env_.machine.connections() != checked_connections_)
       throw Held{JobState::paused, "the machine reconnected while the plate was measured (its tip may have changed): "
                                    "job.resume measures the plate again"};
     sink_.progress({"registering", static_cast<int>(i), static_cast<int>(touches.size()), 0});
-    const hal::TouchResult r = touch(touches[i], d.clearance_z, d.probe_speed_mm_s);
+    const hal::TouchResult r = touch(touches[i], planner::touch_motions(touches[i], at, d.clearance_z, d));
+    at = touches[i].start;
     if (!r.contact)
       throw RpcError(rpc_code::registration_error,
                      "plate touch " + std::to_string(touches[i].id) + " (" + planner::to_string(touches[i].target) +
@@ -397,9 +398,9 @@ void JobRunner::run(bool rehome, bool reregister) {
       qualification_of[e.touch_id] = e.qualification;
     }
     TouchJournal journal(journal_file);
-    std::map<int, double> planned_s;
+    std::map<int, double> planned_s;  // by touch; -1 the way home
     for (const planner::Motion& m : plan.program.motions) planned_s[m.touch] += m.time_s;
-    double remaining_s = 0;
+    double remaining_s = planned_s[-1];
     for (const planner::Touch& t : plan.program.touches)
       if (!results.contains(t.id)) remaining_s += planned_s[t.id];
     const int total = static_cast<int>(plan.program.touches.size());
@@ -413,13 +414,17 @@ void JobRunner::run(bool rehome, bool reregister) {
     };
     report();
     const double clearance = plan.program.clearance_z;
+    // The plan's motions, from where the ball is now for the first touch left to make.
+    hal::Vec3 at = probed ? hal::Vec3::Zero() : env_.machine.cmm().status().position;
     for (const planner::Touch& t : plan.program.touches) {
       if (results.contains(t.id)) continue;
       check_control();
       if (env_.machine.connections() != checked_connections_)  // the driver reconnected: the tip may have changed
         info = check_qualification(env_.machine.cmm().info(), false);
       const int q = static_cast<int>(qualifications_ ? qualifications_->list.size() - 1 : 0);
-      const hal::TouchResult r = touch(t, clearance, machine.probe_speed_mm_s);
+      const hal::TouchResult r =
+          touch(t, motions_from(at, planner::motions_of(plan.program, t.id), t, clearance, machine));
+      at = t.start;
       try {
         journal.append({t.id, r, q});
       } catch (const std::exception&) {
@@ -436,9 +441,14 @@ void JobRunner::run(bool rehome, bool reregister) {
       sink_.touched(t.id, r);
       report();
     }
-    // Back up to the travel plane: a finished job leaves the probe clear of the part.
-    const hal::Vec3 at = env_.machine.cmm().status().position;
-    if (!probed && at.z() < clearance) env_.machine.cmm().move({hal::Vec3(at.x(), at.y(), clearance), 0});
+    // Home, as the program ends: a finished job leaves the probe clear of the part.
+    if (!probed) {
+      const std::span<const planner::Motion> home = planner::home_motions_of(plan.program);
+      const std::vector<planner::Motion> way = !home.empty() && (home.front().from - at).norm() <= 1e-3
+                                                   ? std::vector<planner::Motion>(home.begin(), home.end())
+                                                   : planner::home_motions(at, plan.program.home, clearance, machine);
+      run_motions(env_.machine.cmm(), way, [this] { check_stop(); });
+    }
 
     const JobResultInputs inputs{.model = model,
                                  .plan = plan,

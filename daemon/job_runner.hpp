@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "daemon/touch_journal.hpp"
 #include "hal/motion.hpp"
 #include "planner/touch.hpp"
+#include "planner/touch_sequence.hpp"
 
 namespace cmm::daemon {
 
@@ -69,7 +71,7 @@ class JobRunner {
   Registration measure_plate(double radius_mm);
   void check_control() const;
   void check_stop() const;  // between the motions of one touch: a stop, a cancel, a shutdown
-  hal::TouchResult touch(const planner::Touch& t, double clearance_z, double probe_speed_mm_s);
+  hal::TouchResult touch(const planner::Touch& t, std::span<const planner::Motion> motions);
   // Leaves a touch a stop cut short along its search line; `clear_of_part` (a cancel) also rises to
   // the clearance plane when no touch was in progress. Never throws: what went wrong is returned
   // (and logged), for a caller that must not move on without it.

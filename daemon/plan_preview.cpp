@@ -89,10 +89,14 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
   const double homed_at_s = cmm.status().t_s;
   int contacts = 0, misses = 0, early = 0, out_of_travel = 0, other = 0;
   nlohmann::json problems = nlohmann::json::array();
+  hal::Vec3 at = cmm.status().position;
   for (const planner::Touch& t : plan.program.touches) {
     cancel.throw_if_requested("the dry run");
     try {
-      const hal::TouchResult r = run_touch(cmm, t, plan.program.clearance_z, {0, machine.probe_speed_mm_s});
+      const std::vector<planner::Motion> motions =
+          motions_from(at, planner::motions_of(plan.program, t.id), t, plan.program.clearance_z, machine);
+      at = t.start;
+      const hal::TouchResult r = run_motions(cmm, motions);
       (r.contact ? contacts : misses)++;
       if (!r.contact) problems.push_back({{"touch", t.id}, {"kind", "miss"}});
     } catch (const hal::Fault& f) {
@@ -102,6 +106,7 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
       if (problems.size() < 100) problems.push_back({{"touch", t.id}, {"kind", hal::to_string(f.kind())}, {"message", f.what()}});
       try {
         recover(cmm);
+        at = cmm.status().position;
       } catch (const hal::Fault& stuck) {
         // The simulated ball cannot get free (it stopped inside the mesh): the rest would not say more.
         problems.push_back({{"touch", t.id}, {"kind", "dry_run_stopped"}, {"message", stuck.what()}});

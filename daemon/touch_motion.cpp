@@ -1,39 +1,50 @@
+// Planned motions as commands, and the recovery moves; see touch_motion.hpp.
 #include "daemon/touch_motion.hpp"
 
-#include <algorithm>
-
 namespace cmm::daemon {
+
+namespace {
+constexpr double same_place_mm = 1e-3;
+}
+
+hal::TouchResult run_motion(hal::Cmm& cmm, const planner::Motion& m) {
+  if (m.kind != planner::MotionKind::probe) {
+    cmm.move({m.to, m.speed_mm_s});
+    return {};
+  }
+  hal::ProbeMove search;
+  search.start = m.from;
+  search.direction = m.direction;
+  search.max_travel_mm = m.max_travel_mm;
+  search.speed_mm_s = m.speed_mm_s;
+  search.retract_mm = m.retract_mm;
+  search.fail_on_miss = false;
+  search.min_travel_mm = m.min_travel_mm;
+  return cmm.probe(search);
+}
+
+hal::TouchResult run_motions(hal::Cmm& cmm, std::span<const planner::Motion> motions,
+                           const std::function<void()>& before_motion) {
+  hal::TouchResult result;
+  for (const planner::Motion& m : motions) {
+    if (before_motion) before_motion();
+    const hal::TouchResult r = run_motion(cmm, m);
+    if (m.kind == planner::MotionKind::probe) result = r;
+  }
+  return result;
+}
+
+std::vector<planner::Motion> motions_from(const hal::Vec3& at, std::span<const planner::Motion> planned,
+                                          const planner::Touch& touch, double clearance_z,
+                                          const description::MachineDescription& machine) {
+  if (!planned.empty() && (planned.front().from - at).norm() <= same_place_mm)
+    return {planned.begin(), planned.end()};
+  return planner::touch_motions(touch, at, clearance_z, machine);
+}
 
 void rise_to_clearance(hal::Cmm& cmm, double clearance_z, const TouchSpeeds& speeds) {
   const hal::Vec3 at = cmm.status().position;
   if (at.z() < clearance_z) cmm.move({hal::Vec3(at.x(), at.y(), clearance_z), speeds.travel_mm_s});
-}
-
-hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds,
-                           const std::function<void()>& before_motion) {
-  const auto check = [&] {
-    if (before_motion) before_motion();
-  };
-  check();
-  rise_to_clearance(cmm, clearance_z, speeds);
-  check();
-  const hal::Vec3 above(touch.start.x(), touch.start.y(), std::max(clearance_z, cmm.status().position.z()));
-  cmm.move({above, speeds.travel_mm_s});
-  check();
-  cmm.move({touch.start, speeds.travel_mm_s});
-  check();
-  hal::ProbeMove search;
-  search.start = touch.start;
-  search.direction = touch.direction;
-  search.max_travel_mm = touch.max_travel_mm;
-  search.speed_mm_s = speeds.probe_mm_s;
-  search.retract_mm = touch.retract_mm;
-  search.fail_on_miss = false;  // a miss is a result for this point, not a reason to stop the job
-  // Refuse a trigger in the first fifth of the run-up: the part is then far from where the plan put it.
-  search.min_travel_mm = std::min(0.2 * touch.max_travel_mm, 0.5);
-  const hal::TouchResult result = cmm.probe(search);
-  cmm.move({touch.start, speeds.travel_mm_s});
-  return result;
 }
 
 void leave_touch(hal::Cmm& cmm, const hal::Vec3& start, const hal::Vec3& direction, double clearance_z,

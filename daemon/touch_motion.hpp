@@ -1,31 +1,41 @@
-// How cmmd drives one planned touch on a machine: up to the clearance plane, across it, down to the
-// search start, then the search (DESIGN.md, Safety: travel between touches goes via that plane).
+// How cmmd drives planned motions (planner/touch_sequence.hpp) on a machine, one command each, and
+// the recovery moves that stay outside any program: leaving a touch a stop cut short, rising clear
+// of the part (DESIGN.md, Safety: travel between touches goes via the clearance plane).
 #pragma once
 
 #include <functional>
+#include <span>
+#include <vector>
 
 #include "hal/cmm.hpp"
-#include "planner/touch.hpp"
+#include "planner/touch_sequence.hpp"
 
 namespace cmm::daemon {
+
+// One planned motion as the one command it is: a guarded move for a rise, travel, descent or return;
+// the probing search for a probe (its retract included; a miss is a result for the point, not a
+// fault that stops the job). Faults propagate as the driver raises them.
+hal::TouchResult run_motion(hal::Cmm& cmm, const planner::Motion& motion);
+
+// Motions in order (a touch's, or the way home), `before_motion` before each; it may throw to end
+// them between two (a stop() reaches only a motion that is running). Returns the probe's result.
+hal::TouchResult run_motions(hal::Cmm& cmm, std::span<const planner::Motion> motions,
+                           const std::function<void()>& before_motion = {});
+
+// The motions that make `touch` with the ball at `at`: the planned ones when the ball is where they
+// begin (to a micrometre), else the same sequence from here — a run that resumes, or that starts
+// where the plate's measurement or homing left the ball.
+std::vector<planner::Motion> motions_from(const hal::Vec3& at, std::span<const planner::Motion> planned,
+                                          const planner::Touch& touch, double clearance_z,
+                                          const description::MachineDescription& machine);
 
 struct TouchSpeeds {
   double travel_mm_s = 0;  // 0: the machine's travel speed
   double probe_mm_s = 5;
 };
 
-// Rises from wherever the ball is to clearance_z (a ball above the plane rises no further), travels
-// there to above the search start, descends to it, searches, and goes back to the start: the line
-// it came down on is the one the plan checked, so the next rise leaves from there. The search
-// refuses a trigger in its first millimetre or so (min_travel_mm): the plan starts every search at
-// least δ + pre-travel before the nominal contact. `before_motion` runs before each of the motions
-// and may throw to end the touch between them: a stop() reaches only a motion that is running.
-// Faults propagate as the driver raises them.
-hal::TouchResult run_touch(hal::Cmm& cmm, const planner::Touch& touch, double clearance_z, const TouchSpeeds& speeds,
-                           const std::function<void()>& before_motion = {});
-
-// Straight up to clearance_z from where the ball is (a ball above the plane stays): the rise every
-// touch starts with, safe from where the last touch left the ball (its search start).
+// Straight up to clearance_z from where the ball is (a ball above the plane stays): how a cancelled
+// job leaves the ball, safe from where any touch left it (its search start).
 void rise_to_clearance(hal::Cmm& cmm, double clearance_z, const TouchSpeeds& speeds);
 
 // After a stop in the middle of a touch: back along the search line to its start, then up to the

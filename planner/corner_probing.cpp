@@ -58,6 +58,7 @@ class TouchWriter {
     t.nominal_centre = t.surface_point - options_.ball_radius_mm * t.direction;
     t.start = t.nominal_centre - search_mm * t.direction;
     t.max_travel_mm = 2 * search_mm;
+    t.min_travel_mm = min_travel_for(t.max_travel_mm);
     t.retract_mm = retract_mm;
     touches.push_back(t);
   }

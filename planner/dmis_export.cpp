@@ -127,34 +127,23 @@ std::string feat_statement(const DmisFeature& f) {
   return s;
 }
 
-// Emits the program's motion rule as GOTOs: rise to the clearance plane (when below it), travel on
-// it, descend. A move whose end prints the same as where the ball is would be a zero-length GOTO:
-// left out.
+// Emits the program's moves as GOTOs. A move whose end prints the same as where the ball is would be
+// a zero-length GOTO (a return to a start the retract already reached): left out.
 class GotoPath {
  public:
-  GotoPath(std::ostringstream& out, const Vec3& at) : out_(out), at_(xyz(at)), position_(at) {
+  GotoPath(std::ostringstream& out, const Vec3& at) : out_(out), at_(xyz(at)) {
     out_ << "GOTO/" << at_ << '\n';
   }
   void go(const Vec3& p) {
     const std::string text = xyz(p);
     if (text != at_) out_ << "GOTO/" << text << '\n';
     at_ = text;
-    position_ = p;
   }
-  void via_clearance(const Vec3& target, double clearance_z) {
-    if (position_.z() < clearance_z) go({position_.x(), position_.y(), clearance_z});
-    go({target.x(), target.y(), clearance_z});
-    go(target);
-  }
-  void moved_to(const Vec3& p) {  // a motion the DME makes by itself (PTMEAS and its retract)
-    at_ = xyz(p);
-    position_ = p;
-  }
+  void moved_to(const Vec3& p) { at_ = xyz(p); }  // a motion the DME makes by itself (PTMEAS and its retract)
 
  private:
   std::ostringstream& out_;
   std::string at_;
-  Vec3 position_;
 };
 
 // The SNSET distances in force; a statement only when one changes.
@@ -333,6 +322,13 @@ void write_dmis(std::ostream& out, const MoveProgram& program, const description
   }
   for (std::size_t i = 0; i < owner.size(); ++i)
     if (owner[i] < 0) refuse("touch " + std::to_string(program.touches[i].id) + " is in no feature");
+  std::vector<int> searches(program.touches.size(), 0);
+  for (const Motion& m : program.motions)
+    if (const auto it = by_id.find(m.touch); m.kind == MotionKind::probe && it != by_id.end()) ++searches[it->second];
+  for (std::size_t i = 0; i < searches.size(); ++i)
+    if (searches[i] != 1)
+      refuse("touch " + std::to_string(program.touches[i].id) + " has " + std::to_string(searches[i]) +
+             " probe motions in the program, not one");
   std::sort(order.begin(), order.end());
 
   std::ostringstream s;
@@ -352,26 +348,50 @@ void write_dmis(std::ostream& out, const MoveProgram& program, const description
   s << "FEDRAT/POSVEL,MPM," << mm(machine.max_speed_mm_s * 0.06) << '\n';
   s << "FEDRAT/MESVEL,MPM," << mm(machine.probe_speed_mm_s * 0.06) << '\n';
 
+  // The program's own motions, feature block by feature block: a MEAS block holds every touch of its
+  // feature, so a program that interleaves two features cannot be written as it runs.
+  std::vector<std::size_t> feature_of(program.touches.size());
+  for (std::size_t i = 0; i < owner.size(); ++i) feature_of[i] = static_cast<std::size_t>(owner[i]);
   SensorSettings settings(s);
   if (!order.empty()) settings.set(motions[by_id.at(features[order.front().second].touch_ids.front())]);
   GotoPath path(s, program.home);  // the DME's position before the program is unknown: go home first
-  for (const auto& [first, k] : order) {
-    const DmisFeature& f = features[k];
-    settings.set(motions[by_id.at(f.touch_ids.front())]);
-    s << feat_statement(f) << '\n';
-    s << "MEAS/" << kind_word(f.kind) << ",F(" << f.label << ")," << f.touch_ids.size() << '\n';
-    for (const int id : f.touch_ids) {
-      const std::size_t i = by_id.at(id);
-      const Touch& t = program.touches[i];
-      settings.set(motions[i]);  // inside the block only when touches of one feature differ
-      path.via_clearance(t.start, program.clearance_z);
+  constexpr std::size_t none = static_cast<std::size_t>(-1);
+  std::size_t open = none;  // the feature whose MEAS block is open
+  std::set<std::size_t> closed;
+  const auto close = [&] {
+    if (open == none) return;
+    s << "ENDMES\n";
+    closed.insert(open);
+    open = none;
+  };
+  for (const Motion& m : program.motions) {
+    const auto touch = by_id.find(m.touch);
+    if (m.touch >= 0 && touch == by_id.end())
+      refuse("a motion belongs to touch " + std::to_string(m.touch) + ", which is not in the program");
+    if (touch == by_id.end()) {
+      close();
+    } else if (const std::size_t k = feature_of[touch->second]; open != k) {
+      close();
+      const DmisFeature& f = features[k];
+      if (closed.contains(k))
+        refuse(f.label + ": its touches are not one after the other in the program (touch " + std::to_string(m.touch) +
+               " comes after another feature's), and a MEAS block cannot be split");
+      settings.set(motions[by_id.at(f.touch_ids.front())]);
+      s << feat_statement(f) << '\n';
+      s << "MEAS/" << kind_word(f.kind) << ",F(" << f.label << ")," << f.touch_ids.size() << '\n';
+      open = k;
+    }
+    if (m.kind == MotionKind::probe) {
+      const Touch& t = program.touches[touch->second];
+      settings.set(motions[touch->second]);  // inside the block only when touches of one feature differ
       // DMIS ijk is the surface normal out of the material; the DME approaches along -ijk.
       s << "PTMEAS/CART," << xyz(t.surface_point) << "," << ijk(-t.direction) << '\n';
-      path.moved_to(t.nominal_centre - t.retract_mm * t.direction);
+      path.moved_to(m.to);  // the DME's own search and retract
+    } else {
+      path.go(m.to);
     }
-    s << "ENDMES\n";
   }
-  path.via_clearance(program.home, program.clearance_z);
+  close();
   s << "ENDFIL\n";
   out << s.str();
 }

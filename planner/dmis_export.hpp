@@ -38,12 +38,13 @@ struct DmisOptions {
 // its owner id.
 std::vector<DmisFeature> dmis_features(const MoveProgram& program, const std::vector<geometry::Hole>& holes = {});
 
-// Writes the program as DMIS: header, units, the active tip, then one FEAT and MEAS block per
-// feature in the order of its first touch, with the program's clearance-plane moves as GOTOs, and
-// home. Every touch must be in exactly one feature, and each touch must be what the DME will do
-// with its PTMEAS: unit direction, nominal centre = surface point − r·direction for the active tip's
-// radius r, start on that line behind the contact. Anything else throws std::invalid_argument naming
-// the touch or feature, before a byte is written.
+// Writes the program as DMIS: header, units, the active tip, then the program's motions in order —
+// a GOTO for each move, a PTMEAS for each search (its SNSET distances the touch's) — each feature's
+// touches inside its one FEAT and MEAS block. Every touch must be in exactly one feature, the
+// touches of a feature one after the other in the program (build_program keeps them so), and each
+// touch what the DME will do with its PTMEAS: unit direction, nominal centre = surface point −
+// r·direction for the active tip's radius r, start on that line behind the contact. Anything else
+// throws std::invalid_argument naming the touch or feature, before a byte is written.
 void write_dmis(std::ostream& out, const MoveProgram& program, const description::MachineDescription& machine,
                 const std::vector<DmisFeature>& features, const DmisOptions& options = {});
 

@@ -1,5 +1,7 @@
-// Ordering and expanding the touches into motions; see move_program.hpp.
+// Ordering the touches and expanding them into motions; see move_program.hpp.
 #include "planner/move_program.hpp"
+
+#include <algorithm>
 
 #include "planner/motion_time.hpp"
 #include "planner/tour_order.hpp"
@@ -7,56 +9,85 @@
 
 namespace cmm::planner {
 
-const char* to_string(MotionKind kind) {
-  switch (kind) {
-    case MotionKind::rise: return "rise";
-    case MotionKind::travel: return "travel";
-    case MotionKind::descend: return "descend";
-    case MotionKind::probe: return "probe";
-    case MotionKind::retract: return "retract";
-  }
-  return "?";
+namespace {
+
+// Touches of one feature: the same edge point (its two window touches, or its face touches), the
+// same bore, the same plate corner.
+bool same_feature(const Touch& a, const Touch& b) {
+  const auto group = [](TouchTarget t) { return t == TouchTarget::face ? TouchTarget::edge : t; };
+  return group(a.target) == group(b.target) && a.edge_point == b.edge_point && a.hole == b.hole && a.corner == b.corner;
 }
+
+}  // namespace
 
 MoveProgram build_program(std::vector<Touch> touches, const description::MachineDescription& machine, const Vec3& home,
                           double clearance_z) {
+  const TravelCost cost{machine.max_speed_mm_s, machine.max_accel_mm_s2};
+
+  // Groups of consecutive touches of one feature, each visited as one stop at its first touch.
+  std::vector<std::pair<std::size_t, std::size_t>> groups;  // [begin, end) in `touches`
+  for (std::size_t i = 0; i < touches.size(); ++i)
+    if (i == 0 || !same_feature(touches[i - 1], touches[i])) groups.emplace_back(i, i + 1);
+    else groups.back().second = i + 1;
+  std::vector<Eigen::Vector2d> stops;
+  for (const auto& [begin, end] : groups) {
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (std::size_t i = begin; i < end; ++i) mean += touches[i].start.head<2>();
+    stops.push_back(mean / static_cast<double>(end - begin));
+  }
+  // Each group is entered at whichever of its ends is nearer to where the ball comes from: the two
+  // touches of an edge point lie a few millimetres apart across the edge, and taking every pair the
+  // same way round would cross the edge twice per point.
+  std::vector<Touch> ordered;
+  ordered.reserve(touches.size());
+  Eigen::Vector2d at = home.head<2>();
+  for (const int g : order_touches(stops, home.head<2>(), cost)) {
+    const auto [begin, end] = groups[static_cast<std::size_t>(g)];
+    const bool reverse = cost(at, touches[end - 1].start.head<2>()) < cost(at, touches[begin].start.head<2>());
+    for (std::size_t k = 0; k < end - begin; ++k) ordered.push_back(std::move(touches[reverse ? end - 1 - k : begin + k]));
+    at = ordered.back().start.head<2>();
+  }
+  return program_in_order(std::move(ordered), machine, home, clearance_z);
+}
+
+MoveProgram program_in_order(std::vector<Touch> touches, const description::MachineDescription& machine,
+                             const Vec3& home, double clearance_z) {
   MoveProgram program;
   program.home = home;
   program.clearance_z = clearance_z;
-  const TravelCost cost{machine.max_speed_mm_s, machine.max_accel_mm_s2};
-  std::vector<Eigen::Vector2d> stops;
-  stops.reserve(touches.size());
-  for (const Touch& t : touches) stops.push_back(t.start.head<2>());
-  const Eigen::Vector2d home_xy = home.head<2>();
-  const std::vector<int> order = order_touches(stops, home_xy, cost);
-  program.touches.reserve(touches.size());
-  for (int i : order) program.touches.push_back(std::move(touches[static_cast<std::size_t>(i)]));
-
-  auto add = [&](MotionKind kind, const Vec3& from, const Vec3& to, double speed, int touch) {
-    const double time = trapezoid_time((to - from).norm(), speed, machine.max_accel_mm_s2);
-    program.motions.push_back({kind, from, to, speed, touch, time});
-    program.time_s += time;
-    return time;
-  };
-  // Fixed per-touch costs: descent, search to the nominal contact, retract, rise back.
-  double fixed = 0;
+  program.touches = std::move(touches);
   Vec3 at = home;
   for (const Touch& t : program.touches) {
-    const Vec3 above(t.start.x(), t.start.y(), clearance_z);
-    if (at.z() < clearance_z) fixed += add(MotionKind::rise, at, Vec3(at.x(), at.y(), clearance_z), machine.max_speed_mm_s, t.id);
-    at = Vec3(at.x(), at.y(), clearance_z);
-    add(MotionKind::travel, at, above, machine.max_speed_mm_s, t.id);
-    fixed += add(MotionKind::descend, above, t.start, machine.max_speed_mm_s, t.id);
-    const Vec3 contact = t.nominal_centre;
-    fixed += add(MotionKind::probe, t.start, contact, machine.probe_speed_mm_s, t.id);
-    fixed += add(MotionKind::retract, contact, t.start, machine.max_speed_mm_s, t.id);
+    for (Motion& m : touch_motions(t, at, clearance_z, machine)) program.motions.push_back(std::move(m));
     at = t.start;
   }
-  if (at.z() < clearance_z) fixed += add(MotionKind::rise, at, Vec3(at.x(), at.y(), clearance_z), machine.max_speed_mm_s, -1);
-  at.z() = clearance_z;
-  if ((at - home).norm() > 0) add(MotionKind::travel, at, home, machine.max_speed_mm_s, -1);
-  program.lower_bound_s = fixed + travel_lower_bound(stops, home_xy, cost);
+  for (Motion& m : home_motions(at, home, clearance_z, machine)) program.motions.push_back(std::move(m));
+
+  // Every touch's start is descended to once and risen from once, whatever the order; only the
+  // travel between them depends on it, and no order travels less than a spanning tree of the touches.
+  double fixed = 0;
+  for (const Motion& m : program.motions) {
+    program.time_s += m.time_s;
+    if (m.kind != MotionKind::travel) fixed += m.time_s;
+  }
+  std::vector<Eigen::Vector2d> points;
+  for (const Touch& t : program.touches) points.push_back(t.start.head<2>());
+  program.lower_bound_s =
+      fixed + travel_lower_bound(points, home.head<2>(), {machine.max_speed_mm_s, machine.max_accel_mm_s2});
   return program;
+}
+
+std::span<const Motion> motions_of(const MoveProgram& program, int touch_id) {
+  const auto same = [touch_id](const Motion& m) { return m.touch == touch_id; };
+  const auto first = std::find_if(program.motions.begin(), program.motions.end(), same);
+  const auto last = std::find_if_not(first, program.motions.end(), same);
+  return {first, last};
+}
+
+std::span<const Motion> home_motions_of(const MoveProgram& program) {
+  auto first = program.motions.end();
+  while (first != program.motions.begin() && std::prev(first)->touch == -1) --first;
+  return {first, program.motions.end()};
 }
 
 }  // namespace cmm::planner

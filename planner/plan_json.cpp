@@ -61,10 +61,23 @@ json to_json(const Touch& t, double clearance_z, double probe_speed_mm_s) {
             {"start", vec3_json(t.start)},
             {"max_travel_mm", t.max_travel_mm},
             {"speed_mm_s", probe_speed_mm_s},
+            {"min_travel_mm", t.min_travel_mm},
             {"retract_mm", t.retract_mm}};
   if (t.edge_point >= 0) j["edge_point"] = t.edge_point;
   if (t.hole >= 0) j["hole"] = t.hole;
   if (t.corner >= 0) j["corner"] = t.corner;
+  return j;
+}
+
+json to_json(const Motion& m) {
+  json j = {{"kind", to_string(m.kind)}, {"touch", m.touch},          {"from", vec3_json(m.from)},
+            {"to", vec3_json(m.to)},     {"speed_mm_s", m.speed_mm_s}, {"time_s", m.time_s}};
+  if (m.kind == MotionKind::probe) {
+    j["direction"] = vec3_json(m.direction);
+    j["max_travel_mm"] = m.max_travel_mm;
+    j["min_travel_mm"] = m.min_travel_mm;
+    j["retract_mm"] = m.retract_mm;
+  }
   return j;
 }
 
@@ -142,6 +155,7 @@ json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, co
       {"edge_points", json::array()},
       {"holes", json::array()},
       {"program", json::array()},
+      {"motions", json::array()},
       {"estimate", nullptr},
       {"notes", inputs.notes},
   };
@@ -156,6 +170,7 @@ json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, co
   out["home"] = vec3_json(plan->program.home);
   for (const Touch& t : plan->program.touches)
     out["program"].push_back(to_json(t, plan->clearance_z, machine->probe_speed_mm_s));
+  for (const Motion& m : plan->program.motions) out["motions"].push_back(to_json(m));
   out["estimate"] = {{"time_s", plan->program.time_s}, {"lower_bound_s", plan->program.lower_bound_s},
                      {"touches", plan->program.touches.size()}};
   for (const std::string& note : plan->notes) out["notes"].push_back(note);

@@ -1,5 +1,7 @@
-// The plan JSON of DESIGN.md ("cmmd.plan/1", schema in docs/plan.schema.json): what cmm-plan writes
+// The plan JSON of DESIGN.md ("cmmd.plan/2", schema in docs/plan.schema.json): what cmm-plan writes
 // and the daemon stores with each job. Vectors are [x, y, z]; angles in degrees at this edge only.
+// Version 2 added the motions the machine makes (planner/touch_sequence.hpp) and each touch's
+// minimum travel.
 #pragma once
 
 #include <filesystem>
@@ -14,7 +16,7 @@
 
 namespace cmm::planner {
 
-inline constexpr const char* plan_schema_id = "cmmd.plan/1";
+inline constexpr const char* plan_schema_id = "cmmd.plan/2";
 
 // Where the plan's inputs came from, recorded so a plan can be traced back and re-run.
 struct PlanInputs {
@@ -33,6 +35,7 @@ struct PlanInputs {
 nlohmann::json to_json(const geometry::EdgePoint& point);
 nlohmann::json to_json(const geometry::Hole& hole);
 nlohmann::json to_json(const Touch& touch, double clearance_z, double probe_speed_mm_s);
+nlohmann::json to_json(const Motion& motion);
 
 // Without a measurement plan the windows, approaches, program and estimate stay null or empty;
 // `registration` is the registration's JSON, or null when T_M_S is assumed to be the identity.

@@ -55,39 +55,50 @@ ClearanceCheck StylusClearance::check_stylus_at(const Vec3& ball, const char* wh
   return {};
 }
 
-ClearanceCheck StylusClearance::check(const Touch& t) const {
-  const Vec3 above(t.start.x(), t.start.y(), clearance_z_);
-  const Vec3 end = t.start + t.max_travel_mm * t.direction;
-  for (const auto& [p, what] : {std::pair{above, "above the approach start"}, {t.start, "the approach start"},
-                                {end, "the search end"}})
-    if (!machine_.travel_box.contains(p)) return refuse(std::string(what) + " " + describe(p) + " is outside the travel box");
-  // Steeply against the stylus the shaft would have to pass through the material being touched.
-  if (t.direction.dot(tip_.direction) < -0.5)
-    return refuse("the approach points back along the stylus (from below, for a vertical stylus): it cannot reach");
-  if (std::min(t.start.z(), end.z()) - radius_ < floor_z_)
-    return refuse("the ball would go below the table top at z " + mm(floor_z_));
+ClearanceCheck StylusClearance::check_in_box(const Vec3& p, const char* what) const {
+  if (!machine_.travel_box.contains(p)) return refuse(std::string(what) + " " + describe(p) + " is outside the travel box");
+  return {};
+}
 
-  // Descent: the ball sweeps the column below the clearance plane. A vertical stylus (head above
-  // the ball) stays inside that column, so only the wider head needs its own sweep; any other
-  // stylus is checked along the descent, spaced at the shaft radius as along the search.
-  const double descent = clearance_z_ - t.start.z();
+// The ball sweeps the column below the clearance plane. A vertical stylus (head above the ball)
+// stays inside that column, so only the wider head needs its own sweep; any other stylus is checked
+// along the descent, spaced at the shaft radius as along the search.
+ClearanceCheck StylusClearance::check_descent(const Motion& m) const {
+  if (auto c = check_in_box(m.from, "above the approach start"); !c.ok) return c;
+  if (auto c = check_in_box(m.to, "the approach start"); !c.ok) return c;
+  const double descent = m.from.z() - m.to.z();
   if (descent < 0) return refuse("the approach start lies above the clearance plane");
-  if (auto hit = obstacles_.first_hit(above, -Vec3::UnitZ(), descent, radius_))
+  if (m.to.z() - radius_ < floor_z_) return refuse("the ball would go below the table top at z " + mm(floor_z_));
+  if (auto hit = obstacles_.first_hit(m.from, -Vec3::UnitZ(), descent, radius_))
     return refuse("the ball would meet the part at " + describe(hit->contact) + " descending to the approach start");
   const Vec3 up = -tip_.direction;
   if (up.z() > 1 - 1e-9) {
-    if (obstacles_.first_hit(above + up * tip_.shaft_length_mm, -Vec3::UnitZ(), descent, tip_.head_radius_mm))
+    if (obstacles_.first_hit(m.from + up * tip_.shaft_length_mm, -Vec3::UnitZ(), descent, tip_.head_radius_mm))
       return refuse("the probe head would meet the part descending to the approach start");
-  } else {
-    const int steps = std::max(1, static_cast<int>(std::ceil(descent / std::max(tip_.shaft_radius_mm, 0.05))));
-    for (int i = 0; i < steps; ++i)  // the start itself is the search's first position, below
-      if (auto check = check_stylus_at(above - (descent * i / steps) * Vec3::UnitZ(), "descending to the approach start");
-          !check.ok)
-        return check;
+    return {};
   }
+  const int steps = std::max(1, static_cast<int>(std::ceil(descent / std::max(tip_.shaft_radius_mm, 0.05))));
+  for (int i = 0; i < steps; ++i)  // the start itself is the search's first position, checked with it
+    if (auto c = check_stylus_at(m.from - (descent * i / steps) * Vec3::UnitZ(), "descending to the approach start");
+        !c.ok)
+      return c;
+  return {};
+}
 
-  // Search: the ball must meet the mesh first near the target, not on something on its way.
-  const auto hit = obstacles_.first_hit(t.start, t.direction, t.max_travel_mm, radius_);
+// The search and the probe's retract: the ball must first meet the mesh near the target, and the
+// stylus clear the part up to the latest contact the real part allows; the retract from the earliest
+// contact may take the ball back past the start, along the same line.
+ClearanceCheck StylusClearance::check_search(const Touch& t, const Motion& m) const {
+  const Vec3& d = m.direction;
+  const Vec3 end = m.from + m.max_travel_mm * d;
+  if (auto c = check_in_box(end, "the search end"); !c.ok) return c;
+  // As the machine checks a search before it starts: the farthest a retract can reach back.
+  const Vec3 retract_reach = m.from - std::max(0.0, m.retract_mm - m.min_travel_mm) * d;
+  if (auto c = check_in_box(retract_reach, "the probe's retract"); !c.ok) return c;
+  if (std::min(m.from.z(), end.z()) - radius_ < floor_z_)
+    return refuse("the ball would go below the table top at z " + mm(floor_z_));
+
+  const auto hit = obstacles_.first_hit(m.from, d, m.max_travel_mm, radius_);
   if (!hit) return refuse("the search along the approach never meets the reference mesh");
   const double reach = 2 * delta_ + 0.25;
   if ((hit->contact - t.surface_point).norm() > reach)
@@ -95,11 +106,42 @@ ClearanceCheck StylusClearance::check(const Touch& t) const {
                   mm((hit->contact - t.surface_point).norm()) + " from the target");
   // Shaft and head along the search, up to the latest contact the real part allows (δ past the
   // nominal one, plus the sag of the ball's circle across δ); spaced at the shaft radius.
-  const double latest = (t.nominal_centre - t.start).norm() + delta_ + radius_ - std::sqrt(std::max(0.0, radius_ * radius_ - delta_ * delta_));
+  const double nominal = (t.nominal_centre - m.from).norm();
+  const double latest = nominal + delta_ + radius_ - std::sqrt(std::max(0.0, radius_ * radius_ - delta_ * delta_));
   const int steps = std::max(1, static_cast<int>(std::ceil(latest / std::max(tip_.shaft_radius_mm, 0.05))));
   for (int i = 0; i <= steps; ++i) {
-    const Vec3 ball = t.start + (latest * i / steps) * t.direction;
-    if (auto check = check_stylus_at(ball, "during the search"); !check.ok) return check;
+    const Vec3 ball = m.from + (latest * i / steps) * d;
+    if (auto c = check_stylus_at(ball, "during the search"); !c.ok) return c;
+  }
+  // From a contact δ early, the retract ends behind the start.
+  const double behind = m.retract_mm - std::max(0.0, nominal - delta_);
+  if (behind > 0) {
+    const Vec3 ball = m.from - behind * d;
+    if (ball.z() - radius_ < floor_z_) return refuse("the ball would go below the table top at z " + mm(floor_z_) + " retracting");
+    if (obstacles_.first_hit(m.from, -d, behind, radius_)) return refuse("the ball would meet the part retracting behind the start");
+    if (auto c = check_stylus_at(ball, "retracting behind the search start"); !c.ok) return c;
+  }
+  return {};
+}
+
+ClearanceCheck StylusClearance::check(const Touch& t) const {
+  // Steeply against the stylus the shaft would have to pass through the material being touched.
+  if (t.direction.dot(tip_.direction) < -0.5)
+    return refuse("the approach points back along the stylus (from below, for a vertical stylus): it cannot reach");
+  // The touch's own motions, from above its start: the rise that brings the ball there is the touch
+  // before's descent backwards, checked with that one, and the travel runs on the clearance plane.
+  const Vec3 above(t.start.x(), t.start.y(), clearance_z_);
+  if (auto c = check_in_box(above, "above the approach start"); !c.ok) return c;
+  for (const Motion& m : touch_motions(t, above, clearance_z_, machine_)) {
+    ClearanceCheck c;
+    switch (m.kind) {
+      case MotionKind::rise:
+      case MotionKind::travel: c = check_in_box(m.to, "the travel's end"); break;
+      case MotionKind::descend: c = check_descent(m); break;
+      case MotionKind::probe: c = check_search(t, m); break;
+      case MotionKind::return_to_start: c = check_in_box(m.to, "the approach start"); break;  // on the searched line
+    }
+    if (!c.ok) return c;
   }
   return {};
 }

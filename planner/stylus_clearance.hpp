@@ -1,5 +1,5 @@
 // Whether one touch's motions are safe: inside the travel box, above the table, and with the ball,
-// shaft and head clear of the reference mesh from the clearance plane down to the contact.
+// shaft and head clear of the reference mesh from the clearance plane down to the contact and back.
 #pragma once
 
 #include <string>
@@ -7,6 +7,7 @@
 #include "geometry/ball_sweep.hpp"
 #include "hal/description/machine_description.hpp"
 #include "planner/touch.hpp"
+#include "planner/touch_sequence.hpp"
 
 namespace cmm::planner {
 
@@ -22,14 +23,18 @@ class StylusClearance {
   StylusClearance(const geometry::BallSweeper& obstacles, double floor_z, const description::MachineDescription& machine,
                   double ball_radius, double clearance_z, double delta);
 
-  // Descent from the clearance plane to the start, the search to the latest possible contact,
-  // and (by symmetry) the retract and rise. The ball must first meet the mesh near the target.
+  // The touch's motions (planner/touch_sequence): the descent from the clearance plane to the start,
+  // the search to the latest possible contact, the probe's retract from the earliest one, the return
+  // (on the searched line) and, backwards, the rise. The ball must first meet the mesh near the target.
   ClearanceCheck check(const Touch& touch) const;
 
   double clearance_z() const { return clearance_z_; }
 
  private:
   ClearanceCheck check_stylus_at(const Vec3& ball_centre, const char* where) const;
+  ClearanceCheck check_in_box(const Vec3& p, const char* what) const;
+  ClearanceCheck check_descent(const Motion& descend) const;
+  ClearanceCheck check_search(const Touch& touch, const Motion& probe) const;
 
   const geometry::BallSweeper& obstacles_;
   double floor_z_;

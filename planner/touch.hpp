@@ -2,6 +2,7 @@
 // measures. Touches are planned in the machine frame M; ball-centre positions throughout.
 #pragma once
 
+#include <algorithm>
 #include <string>
 
 #include "geometry/mesh.hpp"
@@ -20,6 +21,11 @@ enum class TouchTarget {
 
 const char* to_string(TouchTarget target);
 
+// The minimum travel a plan gives a search of `max_travel_mm`: its first fifth, at most 0.5 mm. Every
+// search starts more than that before the earliest contact the real part allows (δ + pre-travel
+// before the nominal one), so a trigger there is no touch of the part.
+inline double min_travel_for(double max_travel_mm) { return std::min(0.2 * max_travel_mm, 0.5); }
+
 struct Touch {
   int id = 0;  // stable within a plan
   TouchTarget target = TouchTarget::edge;
@@ -32,7 +38,11 @@ struct Touch {
   Vec3 nominal_centre = Vec3::Zero(); // ball centre at the nominal contact: surface_point − r·direction
   Vec3 start = Vec3::Zero();          // ball centre where the search begins
   double max_travel_mm = 0;           // search length from `start`; ends past the nominal contact
-  double retract_mm = 0;              // back along −direction after the contact
+  // A trigger nearer the start than this is no touch (the part is far from where the plan puts it,
+  // or the probe fouled): the machine refuses it as EarlyTrigger. Well before the earliest contact
+  // the real part allows.
+  double min_travel_mm = 0;
+  double retract_mm = 0;              // back along −direction after the contact, by the probe itself
 };
 
 }  // namespace cmm::planner

@@ -24,6 +24,7 @@ Touch make_touch(TouchTarget target, const Vec3& surface_point, const Vec3& dire
   t.nominal_centre = surface_point - o.radius * t.direction;
   t.start = t.nominal_centre - (o.delta + pre_travel) * t.direction;
   t.max_travel_mm = 2 * o.delta + pre_travel + o.overtravel_mm;
+  t.min_travel_mm = min_travel_for(t.max_travel_mm);
   t.retract_mm = o.delta + pre_travel;
   return t;
 }

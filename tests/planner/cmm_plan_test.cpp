@@ -85,7 +85,7 @@ TEST_F(CmmPlan, SamplePartPlansWithHolesAndValidates) {
   EXPECT_NE(r.output.find("5 hole"), std::string::npos) << r.output;  // summary line counts holes
   expect_valid(path("plan.json"));
   const auto plan = load(path("plan.json"));
-  EXPECT_EQ(plan["schema"], "cmmd.plan/1");
+  EXPECT_EQ(plan["schema"], "cmmd.plan/2");
   EXPECT_EQ(plan["holes"].size(), 5u);
   EXPECT_TRUE(plan["registration"].is_null());
   for (const auto& p : plan["edge_points"]) EXPECT_NE(p["kind"], "boundary");

@@ -3,9 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <cerrno>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -90,6 +91,11 @@ Hole bore_hole() {
 // z = 20 beyond y = 150: convex edge points 12 (top/front) and 7 (top/right), whose second touch
 // comes after a face touch in machine order; concave edge point 5 at the step's foot, a touch on
 // its floor (straight down) and one on its wall; bore 3 (Ø10) touched six times 5 mm down.
+// A program of `touches` in the order given, with its motions (what the DMIS export writes).
+MoveProgram sequenced(const MoveProgram& p) {
+  return program_in_order(p.touches, test_machine(), p.home, p.clearance_z);
+}
+
 MoveProgram hand_program() {
   MoveProgram p;
   p.home = Vec3(0, 0, 60);
@@ -103,7 +109,7 @@ MoveProgram hand_program() {
   floor.edge_point = wall.edge_point = 5;
   floor.face = 0;
   wall.face = 1;
-  p.touches = {e12a, e12b, e7a, floor, e7b, wall};
+  p.touches = {e12a, e12b, e7a, e7b, floor, wall};
   const Hole h = bore_hole();
   for (int k = 0; k < 6; ++k) {
     const double angle = k * std::numbers::pi / 3;
@@ -113,7 +119,7 @@ MoveProgram hand_program() {
     t.face = k;
     p.touches.push_back(t);
   }
-  return p;
+  return sequenced(p);
 }
 
 // Registration touches: faces 0 (top, twice), 1 (front) and 2 (left) at plate corner 1 and the
@@ -131,8 +137,8 @@ MoveProgram registration_program() {
   front.face = 1;
   left.face = 2;
   Touch fiducial = make_touch(24, TouchTarget::fiducial, Vec3(30, 20, 12), -Vec3::UnitZ());
-  p.touches = {top, front, top2, left, fiducial};
-  return p;
+  p.touches = {top, top2, front, left, fiducial};
+  return sequenced(p);
 }
 
 std::string dmis_of(const MoveProgram& program, const std::vector<DmisFeature>& features,
@@ -218,13 +224,13 @@ TEST(DmisExport, CheckerAcceptsTheGoldenFiles) {
       << check_dmis(read_text(dir / "registration.dmi"), full_check(registration));
 }
 
-TEST(DmisExport, FeaturesInOrderOfFirstTouchEachInOneBlock) {
+TEST(DmisExport, FeaturesInProgramOrderEachInOneBlock) {
   const MoveProgram program = hand_program();
   const auto features = dmis_features(program, {bore_hole()});
   ASSERT_EQ(features.size(), 5u);
   const std::vector<std::string> labels = {"EDGE_12", "EDGE_7", "FACE_5_0", "FACE_5_1", "BORE_3"};
   for (std::size_t i = 0; i < labels.size(); ++i) EXPECT_EQ(features[i].label, labels[i]);
-  EXPECT_EQ(features[1].touch_ids, (std::vector<int>{3, 5}));  // not adjacent in the program
+  EXPECT_EQ(features[1].touch_ids, (std::vector<int>{3, 5}));
   const auto lines = lines_of(dmis_of(program, features));
   const std::size_t meas = line_starting(lines, "MEAS/POINT,F(EDGE_7),2");
   const std::size_t end = line_starting(lines, "ENDMES", meas);
@@ -233,6 +239,53 @@ TEST(DmisExport, FeaturesInOrderOfFirstTouchEachInOneBlock) {
   for (std::size_t i = meas; i < end; ++i) ptmeas += lines[i - 1].rfind("PTMEAS/", 0) == 0;
   EXPECT_EQ(ptmeas, 2);
   EXPECT_LT(end, line_starting(lines, "F(FACE_5_0)="));
+
+  // A program that makes a feature's touches with another's between them cannot be written as it
+  // runs (a MEAS block holds all of its feature's touches): refused, nothing written.
+  MoveProgram interleaved = program;
+  std::swap(interleaved.touches[3], interleaved.touches[4]);  // EDGE_7, FACE_5_0, EDGE_7
+  interleaved = sequenced(interleaved);
+  std::ostringstream out;
+  try {
+    write_dmis(out, interleaved, test_machine(), dmis_features(interleaved, {bore_hole()}));
+    ADD_FAILURE() << "an interleaved program was written";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("EDGE_7: its touches are not one after the other"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(out.str().empty());
+}
+
+TEST(DmisExport, TheGotosAreTheProgramsMoves) {
+  const MoveProgram program = hand_program();
+  const auto lines = lines_of(dmis_of(program, dmis_features(program, {bore_hole()})));
+  std::vector<std::string> gotos;
+  for (const std::string& line : lines)
+    if (line.rfind("GOTO/", 0) == 0) gotos.push_back(line.substr(5));
+  std::vector<std::string> moves = {"0.0000,0.0000,60.0000"};  // home first: the DME starts anywhere
+  for (const Motion& m : program.motions) {
+    char text[96];
+    std::snprintf(text, sizeof text, "%.4f,%.4f,%.4f", m.to.x(), m.to.y(), m.to.z());
+    // A probe's search and retract are the PTMEAS; a return to where the retract already left the
+    // ball prints as no move.
+    if (m.kind == MotionKind::probe) moves.push_back("(probe)");
+    else moves.emplace_back(text);
+  }
+  std::vector<std::string> expected;
+  std::string at = moves.front();
+  expected.push_back(at);
+  for (std::size_t i = 1; i < moves.size(); ++i) {
+    if (moves[i] == "(probe)") {
+      const Motion& probe = program.motions[i - 1];
+      char text[96];
+      std::snprintf(text, sizeof text, "%.4f,%.4f,%.4f", probe.to.x(), probe.to.y(), probe.to.z());
+      at = text;
+      continue;
+    }
+    if (moves[i] != at) expected.push_back(moves[i]);
+    at = moves[i];
+  }
+  EXPECT_EQ(gotos, expected);
 }
 
 TEST(DmisExport, EdgeFeatureNormalIsTheWindowAxisReversed) {
@@ -262,6 +315,7 @@ TEST(DmisExport, BossTouchedFromOutsideIsOuter) {
     t.hole = 1;
     p.touches.push_back(t);
   }
+  p = sequenced(p);
   const auto features = dmis_features(p);
   ASSERT_EQ(features.size(), 1u);
   EXPECT_FALSE(features[0].inner);
@@ -280,6 +334,7 @@ TEST(DmisExport, PtmeasIjkIsMinusTheApproachDirection) {
   Touch down = make_touch(1, TouchTarget::face, Vec3(10, 20, 5), -Vec3::UnitZ());
   down.edge_point = 4;
   p.touches = {down};
+  p = sequenced(p);
   const std::string text = dmis_of(p, dmis_features(p));
   // xyz is the surface point, not the ball centre (10, 20, 6).
   EXPECT_NE(text.find("\nPTMEAS/CART,10.0000,20.0000,5.0000,0.000000,0.000000,1.000000\n"), std::string::npos) << text;
@@ -302,6 +357,7 @@ TEST(DmisExport, PtmeasIjkIsMinusTheApproachDirection) {
 TEST(DmisChecker, TravelBoxIsCheckedOnTheBallCentre) {
   MoveProgram bore = hand_program();
   bore.touches.erase(bore.touches.begin(), bore.touches.begin() + 6);
+  bore = sequenced(bore);
   const std::string text = dmis_of(bore, dmis_features(bore, {bore_hole()}));
   DmisCheckOptions options;
   options.travel_box = description::TravelBox{Vec3(-1, -1, 0), Vec3(104.5, 200, 100)};  // surface point x = 105, centre 104
@@ -585,16 +641,16 @@ TEST(DmisExport, RefusesWhatAPtmeasCannotSay) {
   refused(good, not_unit, "EDGE_12: ijk is not a unit vector");
 
   MoveProgram p = good;
-  p.touches[3].direction *= 1.01;
+  p.touches[4].direction *= 1.01;
   refused(p, features, "touch 4: direction is not a unit vector");
   p = good;
-  p.touches[3].nominal_centre.z() += 0.5;  // planned for a 1.5 mm ball, the tip has 1 mm
+  p.touches[4].nominal_centre.z() += 0.5;  // planned for a 1.5 mm ball, the tip has 1 mm
   refused(p, features, "touch 4: nominal centre is not surface point - r*direction");
   p = good;
-  p.touches[3].start.x() += 0.1;
+  p.touches[4].start.x() += 0.1;
   refused(p, features, "touch 4: start is not on the approach line");
   p = good;
-  p.touches[3].max_travel_mm = 2;
+  p.touches[4].max_travel_mm = 2;
   refused(p, features, "touch 4: the search ends before the nominal contact");
 
   description::MachineDescription other = machine;
@@ -610,6 +666,7 @@ TEST(DmisExport, TextsArePlainAsciiAndNumbersHaveNoNegativeZero) {
   Touch t = make_touch(1, TouchTarget::face, Vec3(-0.00001, 20, 5), Vec3(1e-12, -1e-12, -1));
   t.edge_point = 2;
   p.touches = {t};
+  p = sequenced(p);
   std::ostringstream out;
   write_dmis(out, p, test_machine(), dmis_features(p), {"it's \xc2\xb5m", "part\tname"});
   const std::string text = out.str();
