@@ -284,12 +284,12 @@ nlohmann::json JobManager::result(int id, const std::string& format) const {
     throw RpcError(rpc_code::invalid_state, "job " + std::to_string(id) + " is " + to_string(job.record.state) + ", not done",
                    {{"state", to_string(job.record.state)}});
   if (format == "csv") {
-    const std::optional<std::string> csv = store_.read_file(id, "result.csv");
+    const std::optional<std::string> csv = store_.read(id, JobFile::result_csv);
     if (!csv) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.csv");
-    return {{"csv", *csv}, {"holes_csv", store_.read_file(id, "result.holes.csv").value_or("")}};
+    return {{"csv", *csv}, {"holes_csv", store_.read(id, JobFile::holes_csv).value_or("")}};
   }
   if (format != "json") throw_invalid_param("/format", "must be json or csv");
-  const std::optional<std::string> text = store_.read_file(id, "result.json");
+  const std::optional<std::string> text = store_.read(id, JobFile::result);
   if (!text) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.json");
   return nlohmann::json::parse(*text);
 }

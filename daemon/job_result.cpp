@@ -128,25 +128,28 @@ std::string write_job_result(JobStore& store, int job_id, const JobResultInputs&
   const std::map<int, planner::TouchOutcome> outcomes =
       touches_at_radius(in.plan.program.touches, in.touches, in.touch_qualification, in.qualifications, radius);
   const planner::MeasurementResult result = planner::compensate_plan(
-      in.model.features, in.plan, in.T_M_S, outcomes, {radius, in.config.job.trigger_sigma_mm});
+      in.model.features, in.plan, in.registration.T_M_S, outcomes, {radius, in.config.job.trigger_sigma_mm});
 
   nlohmann::json j = planner::to_json(result);
   for (std::string& note : qualification_notes(in, radius)) j["notes"].push_back(std::move(note));
   j["job"] = job_id;
   j["touches"] = in.touches.size();
   j["machine_time_s"] = in.machine_time_s;
+  j["probing_time_s"] = in.probing_time_s;
+  j["estimate_s"] = in.plan.program.time_s;
   j["name"] = in.request.name;
-  j["registration"] = in.registration.value("registration", nlohmann::json(nullptr));
-  j["registration_method"] = in.registration.value("method", "");
+  j["registration"] = in.registration.fit;
+  j["registration_method"] = to_string(in.registration.method);
   j["traceability"] = traceability(in, radius);
-  j["files"] = {{"csv", "result.csv"}, {"holes_csv", "result.holes.csv"}, {"merged_cloud", "merged.ply"},
-                {"plan", "plan.json"}, {"touches", "touches.jsonl"}};
-  store.write_file(job_id, "result.csv", planner::to_csv(result));
-  store.write_file(job_id, "result.holes.csv", planner::holes_to_csv(result));
+  j["files"] = {{"csv", file_name(JobFile::result_csv)},          {"holes_csv", file_name(JobFile::holes_csv)},
+                {"merged_cloud", file_name(JobFile::merged_cloud)}, {"plan", file_name(JobFile::plan)},
+                {"touches", file_name(JobFile::touches)}};
+  store.write(job_id, JobFile::result_csv, planner::to_csv(result));
+  store.write(job_id, JobFile::holes_csv, planner::holes_to_csv(result));
   geometry::Points scan_points = in.model.mesh.vertices;
-  planner::write_merged_ply(store.folder(job_id) / "merged.ply", scan_points, planner::measured_points_in_scan(result),
-                            in.request.delta_mm);  // δ bounds a reference point's error
-  store.write_file(job_id, "result.json", j.dump(1) + "\n");
+  planner::write_merged_ply(store.path(job_id, JobFile::merged_cloud), scan_points,
+                            planner::measured_points_in_scan(result), in.request.delta_mm);  // δ bounds a reference point's error
+  store.write(job_id, JobFile::result, j.dump(1) + "\n");
 
   const planner::ResultSummary& s = result.summary;
   char line[256];

@@ -12,6 +12,7 @@
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_planning.hpp"
 #include "daemon/job_qualifications.hpp"
+#include "daemon/job_registration.hpp"
 #include "daemon/job_store.hpp"
 #include "hal/description/machine_description.hpp"
 #include "hal/motion.hpp"
@@ -26,15 +27,15 @@ struct JobResultInputs {
   const description::MachineDescription& machine;
   const JobRequest& request;
   const DaemonConfig& config;
-  Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
-  nlohmann::json registration;  // registration.json as the runner stored it
+  const JobRegistration& registration;
   std::map<int, hal::TouchResult> touches;  // by plan touch id
   // The tip qualifications the touches were made under (null: not recorded, a job from before they
   // were), and which one each touch was made under (by plan touch id; missing: the first).
   const JobQualifications* qualifications = nullptr;
   std::map<int, int> touch_qualification;
   description::StylusTip tip;            // the active tip, with its qualification
-  double machine_time_s = 0;   // machine clock from registering to the last touch, this run
+  double machine_time_s = 0;   // machine clock from registering to the end of the program, this run
+  double probing_time_s = 0;   // of which the probing, to hold against the plan's estimate
   std::string version;         // cmmd's
   std::string started_utc, finished_utc;
 };

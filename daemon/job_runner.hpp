@@ -1,38 +1,34 @@
-// One job's run on the machine — planning, registering, probing, result — resumable at any point
-// from its folder's files: registration.json keeps T_M_S and the radius, touches.jsonl every touch.
+// One job's run on the machine, in stages — model, machine, tip, registration, plan, probing,
+// result — resumable at any point from its folder's files (JobStore): registration.json keeps T_M_S
+// and the radius the plan is made for, touches.jsonl every touch, qualifications.json the tip's
+// qualifications. How a run that does not end done ends is ending_of()'s one mapping.
 #pragma once
 
-#include <atomic>
-#include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "daemon/daemon_config.hpp"
+#include "daemon/job_control.hpp"
+#include "daemon/job_ending.hpp"
+#include "daemon/job_planning.hpp"
 #include "daemon/job_record.hpp"
+#include "daemon/job_registration.hpp"
 #include "daemon/job_request.hpp"
-#include "daemon/job_qualifications.hpp"
 #include "daemon/job_store.hpp"
 #include "daemon/machine_link.hpp"
 #include "daemon/model_store.hpp"
+#include "daemon/tip_watch.hpp"
 #include "daemon/touch_journal.hpp"
 #include "hal/motion.hpp"
+#include "planner/measurement_plan.hpp"
 #include "planner/touch.hpp"
 #include "planner/touch_sequence.hpp"
 
 namespace cmm::daemon {
-
-// Requests from other threads, read by the runner between steps (and a stop() makes the step in
-// progress end at once).
-struct JobControl {
-  std::atomic<bool> pause{false};      // job.pause: hold after the current touch
-  std::atomic<bool> cancel{false};     // job.cancel
-  std::atomic<bool> shutdown{false};   // cmmd stopping: the job becomes interrupted
-  std::atomic<bool> operator_stop{false};  // machine.stop or machine.abort during the job
-  void clear() { pause = cancel = shutdown = operator_stop = false; }
-};
 
 // How the runner reports: the manager keeps the record, saves it and notifies clients.
 struct JobSink {
@@ -59,16 +55,30 @@ class JobRunner {
   void run(bool rehome, bool reregister);
 
  private:
-  struct Registration;
-  void prepare_machine(bool rehome);
+  // The touches of the plan made so far (earlier runs' from the journal), by plan touch id, with the
+  // qualification each was made under.
+  struct Touches {
+    std::map<int, hal::TouchResult> results;
+    std::map<int, int> qualification_of;
+    double probing_time_s = 0;  // machine time of this run's probing stage
+  };
+
+  // The stages, in the order run() takes them; each throws to end the run.
+  ReferenceModel load_model();
+  void prepare_machine(bool rehome);  // up, reset, a touch a stop cut short left, homed
+  description::MachineDescription check_tip(bool reregister, bool probed);
+  JobRegistration register_part(bool reregister, const description::StylusTip& tip);
+  description::MachineDescription machine_for_plan(const description::MachineDescription& info,
+                                                   const JobRegistration& registration, bool probed) const;
+  planner::MeasurementPlan plan(const ReferenceModel& model, const JobRegistration& registration,
+                                const description::MachineDescription& machine);
+  Touches probe(const planner::MeasurementPlan& plan, const description::MachineDescription& machine, bool probed);
+  void end(const JobEnding& ending);
+
+  JobRegistration measure_plate(double radius_mm);
+  std::optional<JobRegistration> kept_registration() const;
   bool probing_complete() const;
   void journal_unjournaled();
-  void load_qualifications();
-  description::MachineDescription check_qualification(description::MachineDescription info, bool reregister);
-  void take_on(const description::StylusTip& tip, const std::string& source);
-  void requalify(const std::string& tip_id);
-  Registration registration(bool reregister, double radius_mm, const std::string& tip);
-  Registration measure_plate(double radius_mm);
   void check_control() const;
   void check_stop() const;  // between the motions of one touch: a stop, a cancel, a shutdown
   hal::TouchResult touch(const planner::Touch& t, std::span<const planner::Motion> motions);
@@ -76,17 +86,17 @@ class JobRunner {
   // the clearance plane when no touch was in progress. Never throws: what went wrong is returned
   // (and logged), for a caller that must not move on without it.
   std::optional<std::string> finish_touch_safely(bool clear_of_part = false);
+  double clearance_z() const;  // the plan's clearance plane, once there is a plan; else the machine's
 
   RunEnvironment env_;
   int id_;
   JobRequest request_;
   JobControl& control_;
   JobSink sink_;
+  TipWatch tip_;
   // Touches made but not journalled (the journal could not be written): journalled first when the
   // job goes on, so a full disk loses no touch and makes none twice.
   std::vector<JournalEntry> unjournaled_;
-  std::optional<JobQualifications> qualifications_;  // qualifications.json, once read or made
-  std::uint64_t checked_connections_ = 0;            // MachineLink::connections() at the last check
 };
 
 }  // namespace cmm::daemon

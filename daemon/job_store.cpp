@@ -98,7 +98,7 @@ JobRecord rebuild_record(const fs::path& folder, int id, const std::string& why)
   JobRecord record;
   record.id = id;
   record.created = record.updated = hal::utc_now();
-  const bool finished = fs::exists(folder / "result.json");
+  const bool finished = fs::exists(folder / file_name(JobFile::result));
   record.state = finished ? JobState::done : JobState::interrupted;
   record.reason = "job.json was unreadable (" + why + "); rebuilt from the job folder";
   record.progress.phase = to_string(record.state);
@@ -126,14 +126,21 @@ void save_recovered(const fs::path& dir, const JobRecord& record) {
   }
 }
 
-// A file directly in the job folder; the store's own two files are written by the store only.
-void check_file_name(const std::string& name, bool writing) {
-  const bool reserved = writing && (name == record_file || name == request_file);
-  if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos || reserved)
-    throw std::invalid_argument("\"" + name + "\" is not a job file name (a plain name" +
-                                (writing ? ", not job.json or request.json)" : ")"));
-}
 }  // namespace
+
+const char* file_name(JobFile file) {
+  switch (file) {
+    case JobFile::plan: return "plan.json";
+    case JobFile::registration: return "registration.json";
+    case JobFile::touches: return "touches.jsonl";
+    case JobFile::qualifications: return "qualifications.json";
+    case JobFile::result: return "result.json";
+    case JobFile::result_csv: return "result.csv";
+    case JobFile::holes_csv: return "result.holes.csv";
+    case JobFile::merged_cloud: return "merged.ply";
+  }
+  return "?";
+}
 
 JobStore::JobStore(fs::path jobs_dir) : jobs_dir_(std::move(jobs_dir)) {
   fs::create_directories(jobs_dir_);
@@ -211,18 +218,34 @@ void JobStore::save(const JobRecord& record) {
   write_record(dir, nlohmann::json(record).dump(2));
 }
 
-void JobStore::write_file(int id, const std::string& name, std::string_view content) {
-  check_file_name(name, true);
+fs::path JobStore::path(int id, JobFile file) const { return folder(id) / file_name(file); }
+
+void JobStore::write(int id, JobFile file, std::string_view content) {
   std::lock_guard lock(mutex_);
   const fs::path dir = folder(id);
   if (!fs::is_directory(dir)) throw geometry::FileError::whole(dir, "no such job folder (job " + std::to_string(id) + ")");
-  geometry::write_atomically(dir / name, content);
+  geometry::write_atomically(dir / file_name(file), content);
 }
 
-std::optional<std::string> JobStore::read_file(int id, const std::string& name) const {
-  check_file_name(name, false);
+std::optional<std::string> JobStore::read(int id, JobFile file) const {
   std::lock_guard lock(mutex_);
-  return read_whole(folder(id) / name);
+  return read_whole(path(id, file));
+}
+
+void JobStore::set_aside(int id, JobFile file) {
+  std::lock_guard lock(mutex_);
+  const fs::path from = path(id, file);
+  if (!fs::exists(from)) return;
+  fs::path to = from.parent_path() / (from.stem().string() + ".before-" + hal::utc_now() + from.extension().string());
+  fs::rename(from, to);
+  geometry::sync_folder(from.parent_path());
+}
+
+void JobStore::remove(int id, JobFile file) {
+  std::lock_guard lock(mutex_);
+  const fs::path p = path(id, file);
+  if (!fs::remove(p)) return;
+  geometry::sync_folder(p.parent_path());
 }
 
 }  // namespace cmm::daemon

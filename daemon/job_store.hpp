@@ -1,5 +1,6 @@
 // One folder per job under the state dir (jobs/000042/: request.json, job.json, and the files the
-// runner adds), every write atomic, so a daemon killed at any moment restarts with every job.
+// runner adds), every write atomic, so a daemon killed at any moment restarts with every job. The
+// store owns the folder's file names: everyone else names a file by what it holds (JobFile).
 #pragma once
 
 #include <filesystem>
@@ -14,6 +15,19 @@
 #include "daemon/job_record.hpp"
 
 namespace cmm::daemon {
+
+// The files a job's run leaves in its folder (docs/result.md, Files).
+enum class JobFile {
+  plan,            // plan.json
+  registration,    // registration.json: T_M_S and the tip and radius the plan is made for
+  touches,         // touches.jsonl: the journal
+  qualifications,  // qualifications.json: the tip qualifications the touches were made under
+  result,          // result.json, written last
+  result_csv,      // result.csv
+  holes_csv,       // result.holes.csv
+  merged_cloud,    // merged.ply
+};
+const char* file_name(JobFile file);
 
 class JobStore {
  public:
@@ -37,12 +51,18 @@ class JobStore {
   void save(const JobRecord& record);
 
   std::filesystem::path folder(int id) const;
+  std::filesystem::path path(int id, JobFile file) const;
 
-  // A job's other files (plan.json, result.json, …), written atomically. `name` is a plain file
-  // name (no folder, not job.json or request.json): std::invalid_argument otherwise.
-  void write_file(int id, const std::string& name, std::string_view content);
-  // The file's content, or nullopt if the job has no such file.
-  std::optional<std::string> read_file(int id, const std::string& name) const;
+  // A job's file, written atomically; geometry::FileError on failure.
+  void write(int id, JobFile file, std::string_view content);
+  // Its content, or nullopt if the job has no such file yet.
+  std::optional<std::string> read(int id, JobFile file) const;
+  // Moves the file aside as name.before-<time stamp>.ext, kept for the record (a registration made
+  // again starts a new journal); nothing when there is none. Throws when it cannot: the old file
+  // must not stay where the new run would take it for its own.
+  void set_aside(int id, JobFile file);
+  // Removes the file (nothing when there is none), the folder synced.
+  void remove(int id, JobFile file);
 
  private:
   std::filesystem::path jobs_dir_;

@@ -118,6 +118,13 @@ json to_json(const geometry::Hole& h) {
   };
 }
 
+PlanSummary plan_summary_from_json(const json& plan) {
+  PlanSummary summary;
+  for (const json& t : plan.at("program")) summary.touch_ids.push_back(t.at("id").get<int>());
+  summary.clearance_z = plan.at("clearance_z").get<double>();
+  return summary;
+}
+
 json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, const MeasurementPlan* plan,
                const description::MachineDescription* machine, const json& registration) {
   const auto& t = model.topology;

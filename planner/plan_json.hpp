@@ -37,6 +37,14 @@ nlohmann::json to_json(const geometry::Hole& hole);
 nlohmann::json to_json(const Touch& touch, double clearance_z, double probe_speed_mm_s);
 nlohmann::json to_json(const Motion& motion);
 
+// What cmmd reads back of a plan it wrote (a job resumed from its folder): the program's touch ids
+// in machine order and its clearance plane. nlohmann::json::exception for what is not a plan.
+struct PlanSummary {
+  std::vector<int> touch_ids;
+  double clearance_z = 0;
+};
+PlanSummary plan_summary_from_json(const nlohmann::json& plan);
+
 // Without a measurement plan the windows, approaches, program and estimate stay null or empty;
 // `registration` is the registration's JSON, or null when T_M_S is assumed to be the identity.
 nlohmann::json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs,

@@ -75,7 +75,7 @@ TEST(JobStore, CreatedAndSavedJobsComeBackOnRecover) {
   first.progress = {"probing", 40, 40, 0};
   first.updated = "2026-11-24T13:00:00Z";
   store.save(first);
-  store.write_file(1, "result.json", "{\"ok\": true}");
+  store.write(1, JobFile::result, "{\"ok\": true}");
 
   const auto jobs = JobStore(dir).recover();
   ASSERT_EQ(jobs.size(), 2u);
@@ -83,11 +83,24 @@ TEST(JobStore, CreatedAndSavedJobsComeBackOnRecover) {
   EXPECT_EQ(jobs[0].request, request(1));
   EXPECT_EQ(nlohmann::json(jobs[1]), nlohmann::json(second));
   EXPECT_EQ(jobs[1].request, request(2));
-  EXPECT_EQ(store.read_file(1, "result.json"), "{\"ok\": true}");
-  EXPECT_EQ(store.read_file(1, "plan.json"), std::nullopt);
-  EXPECT_THROW(store.write_file(1, "../2/job.json", "x"), std::invalid_argument);
-  EXPECT_THROW(store.write_file(1, "job.json", "x"), std::invalid_argument);
-  EXPECT_THROW(store.write_file(9, "result.json", "x"), geometry::FileError);
+  EXPECT_EQ(store.read(1, JobFile::result), "{\"ok\": true}");
+  EXPECT_EQ(store.path(1, JobFile::result), dir / "000001" / "result.json");
+  EXPECT_EQ(store.read(1, JobFile::plan), std::nullopt);
+  EXPECT_THROW(store.write(9, JobFile::result, "x"), geometry::FileError);
+
+  // A registration made again sets the journal aside, and the plan goes.
+  store.write(1, JobFile::touches, "{}\n");
+  store.write(1, JobFile::plan, "{}");
+  store.set_aside(1, JobFile::touches);
+  store.remove(1, JobFile::plan);
+  EXPECT_FALSE(store.read(1, JobFile::touches));
+  EXPECT_FALSE(store.read(1, JobFile::plan));
+  int aside = 0;
+  for (const auto& entry : fs::directory_iterator(store.folder(1)))
+    aside += entry.path().filename().string().rfind("touches.before-", 0) == 0;
+  EXPECT_EQ(aside, 1);
+  EXPECT_NO_THROW(store.set_aside(1, JobFile::touches));  // nothing to set aside
+  EXPECT_NO_THROW(store.remove(1, JobFile::plan));
 }
 
 TEST(JobStore, RunningJobsBecomeInterruptedAndIdsGoOnAfterARestart) {

@@ -1,0 +1,387 @@
+// JobRunner on the in-process simulator, behind a recording hal::Cmm: each stage, and each way a run
+// ends — done (its commands the plan's motions one for one, its probing time the plan's estimate),
+// failed (model, plan, registration), cancelled (planning, between touches, mid-touch), paused
+// (operator, stop, fault, journal write, tip), interrupted — and that a held job resumes to done
+// with every touch made once.
+#include "daemon/job_runner.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+
+#include "daemon/driver_factory.hpp"
+#include "fresh_folder.hpp"
+#include "geometry/analytic_parts.hpp"
+#include "geometry/mesh_io.hpp"
+#include "recording_cmm.hpp"
+#include "sim/sim_config.hpp"
+#include "sim/simulated_cmm.hpp"
+#include "tests/tools/small_tmpfs.hpp"
+
+namespace cmm::daemon {
+namespace {
+
+using ::testing::HasSubstr;
+using nlohmann::json;
+using testing::RecordedCommand;
+using testing::RecordingCmm;
+
+// The sample part on its plate, the simulator homing to where the plan's program starts and ends
+// (the travel box's low corner on the clearance plane), so that a run's commands are the plan's.
+json sim_block() {
+  return {{"driver", "sim"},
+          {"part", {{"analytic", "case3_block"}, {"edge_length_mm", 2}}},
+          {"plate_pose", {{"rotation_deg", {0, 0, 7}}, {"translation", {180, 260, 0}}}},
+          {"part_pose", {{"rotation_deg", {0, 0, -4}}, {"translation", {55, 25, 0}}}},
+          {"home_position", {-100, -100, 60}},
+          {"trigger_sigma_mm", 0.001},
+          {"seed", 3}};
+}
+
+// The plate's corners in the part's frame S (the reference mesh's) and in M: T_M_S exactly.
+json given_corners(const json& block, const Eigen::Vector3d& machine_shift = Eigen::Vector3d::Zero()) {
+  const sim::SimConfig truth = sim::sim_config_from_json(block);
+  json corners = json::array();
+  for (int id = 1; id <= truth.plate.corner_count(); ++id) {
+    const Eigen::Vector3d c = truth.plate.corner(id);
+    const Eigen::Vector3d scan = truth.T_P_Part.inverse() * c, machine = truth.T_M_P * c + machine_shift;
+    corners.push_back({{"id", id}, {"scan", {scan.x(), scan.y(), scan.z()}},
+                       {"machine", {machine.x(), machine.y(), machine.z()}}});
+  }
+  return {{"corners", corners}};
+}
+
+class JobRunnerTest : public ::testing::Test {
+ protected:
+  // A job of the sample part at 10 mm spacing (every kind of touch, a few seconds) registered by
+  // given corners; `request` and `block` changes merge into the defaults.
+  void start(const json& request_patch = json::object(), const json& block_patch = json::object(),
+             const std::filesystem::path& jobs_dir = {}) {
+    const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fresh_folder(std::string("runner-") + test->name());
+    std::filesystem::create_directories(dir_ / "models");
+    geometry::write_mesh(dir_ / "models" / "part.ply", geometry::make_case3_block(2).mesh);
+    json block = sim_block();
+    if (block_patch.is_object()) block.merge_patch(block_patch);
+    json config = {{"state_dir", (dir_ / "state").string()},
+                   {"runtime_dir", (dir_ / "run").string()},
+                   {"models_dir", (dir_ / "models").string()},
+                   {"machine", block}};
+    config_.emplace(daemon_config_from_json(config, "job_runner_test", dir_));
+    auto recorder = std::make_unique<RecordingCmm>(make_driver("sim", dir_.string()));
+    recorder_ = recorder.get();
+    link_ = std::make_unique<MachineLink>(std::move(recorder), config_->machine, "sim",
+                                          config_->state_dir / "touch_in_progress.json");
+    models_ = std::make_unique<ModelStore>(config_->state_dir / "models", config_->models_dir);
+    store_ = std::make_unique<JobStore>(jobs_dir.empty() ? config_->state_dir / "jobs" : jobs_dir);
+    json params = {{"model", "file:part.ply"}, {"spacing_mm", 10}, {"registration", given_corners(block)}};
+    if (request_patch.is_object()) params.merge_patch(request_patch);
+    request_.emplace(parse_job_request(params, *config_));
+    id_ = store_->create(params, "test", request_->model).id;
+    JobSink sink;
+    sink.state = [this](JobState state, const std::string& reason, const std::optional<JobFault>& fault) {
+      states_.push_back(state);
+      reason_ = reason;
+      fault_ = fault;
+    };
+    sink.progress = [](const JobProgress&) {};
+    sink.touched = [this](int touch, const hal::TouchResult& r) {
+      touched_.push_back(touch);
+      contacts_ += r.contact;
+      if (after_touch_) after_touch_(static_cast<int>(touched_.size()));
+    };
+    runner_ = std::make_unique<JobRunner>(RunEnvironment{*config_, *link_, *models_, *store_, "test"}, id_, *request_,
+                                          control_, sink);
+  }
+
+  JobState run(bool rehome = false, bool reregister = false) {
+    control_.clear();
+    runner_->run(rehome, reregister);
+    return states_.back();
+  }
+
+  json file(JobFile f) const {
+    const std::optional<std::string> text = store_->read(id_, f);
+    if (!text) throw std::runtime_error(std::string("no ") + file_name(f));
+    return json::parse(*text);
+  }
+  std::vector<JournalEntry> journal() const { return recover_journal(store_->path(id_, JobFile::touches)).entries; }
+  std::multiset<int> journalled() const {
+    std::multiset<int> ids;
+    for (const JournalEntry& e : journal()) ids.insert(e.touch_id);
+    return ids;
+  }
+  std::size_t planned_touches() const { return file(JobFile::plan).at("program").size(); }
+  hal::Vec3 ball() { return link_->cmm().status().position; }
+  // Once the job is done, every touch of the plan is in the journal exactly once.
+  void expect_every_touch_once() {
+    std::multiset<int> planned;
+    const json plan = file(JobFile::plan);
+    for (const json& t : plan.at("program")) planned.insert(t.at("id").get<int>());
+    EXPECT_EQ(journalled(), planned);
+  }
+
+  std::filesystem::path dir_;
+  std::optional<DaemonConfig> config_;
+  RecordingCmm* recorder_ = nullptr;
+  std::unique_ptr<MachineLink> link_;
+  std::unique_ptr<ModelStore> models_;
+  std::unique_ptr<JobStore> store_;
+  std::optional<JobRequest> request_;
+  int id_ = 0;
+  JobControl control_;
+  std::unique_ptr<JobRunner> runner_;
+  std::vector<JobState> states_;
+  std::string reason_;
+  std::optional<JobFault> fault_;
+  std::vector<int> touched_;
+  int contacts_ = 0;
+  std::function<void(int touches_made)> after_touch_;
+};
+
+// --- done
+
+TEST_F(JobRunnerTest, DoneItsCommandsAreThePlansMotionsAndItsTimeTheEstimate) {
+  start();
+  ASSERT_EQ(run(), JobState::done) << reason_;
+  EXPECT_EQ(states_, (std::vector<JobState>{JobState::planning, JobState::registering, JobState::probing, JobState::done}));
+  const json plan = file(JobFile::plan);
+  EXPECT_EQ(plan.at("schema"), "cmmd.plan/2");
+  const json& motions = plan.at("motions");
+  ASSERT_GT(motions.size(), 100u);
+
+  // Homing, then one command per planned motion, in order, the same to 1e-9 mm.
+  const std::vector<RecordedCommand>& sent = recorder_->commands;
+  ASSERT_EQ(sent.size(), motions.size() + 1);
+  EXPECT_EQ(sent.front().kind, RecordedCommand::Kind::home);
+  const auto v = [](const json& j) { return hal::Vec3(j.at(0), j.at(1), j.at(2)); };
+  for (std::size_t i = 0; i < motions.size(); ++i) {
+    const json& m = motions[i];
+    const RecordedCommand& c = sent[i + 1];
+    SCOPED_TRACE("motion " + std::to_string(i) + ": " + m.dump());
+    if (m.at("kind") == "probe") {
+      ASSERT_EQ(c.kind, RecordedCommand::Kind::probe);
+      EXPECT_LE((c.probe.start - v(m.at("from"))).norm(), 1e-9);
+      EXPECT_LE((c.probe.direction - v(m.at("direction"))).norm(), 1e-9);
+      EXPECT_NEAR(c.probe.max_travel_mm, m.at("max_travel_mm").get<double>(), 1e-9);
+      EXPECT_NEAR(c.probe.min_travel_mm, m.at("min_travel_mm").get<double>(), 1e-9);
+      EXPECT_NEAR(c.probe.retract_mm, m.at("retract_mm").get<double>(), 1e-9);
+      EXPECT_NEAR(c.probe.speed_mm_s, m.at("speed_mm_s").get<double>(), 1e-9);
+      EXPECT_FALSE(c.probe.fail_on_miss);
+    } else {
+      ASSERT_EQ(c.kind, RecordedCommand::Kind::move);
+      EXPECT_LE((c.move.target - v(m.at("to"))).norm(), 1e-9);
+      EXPECT_NEAR(c.move.speed_mm_s, m.at("speed_mm_s").get<double>(), 1e-9);
+    }
+  }
+
+  // The probing stage (homing and the given registration aside) takes the plan's time to 1 %.
+  const double estimate_s = plan.at("estimate").at("time_s");
+  const double probing_s = sent.back().t_after_s - sent[1].t_before_s;
+  EXPECT_NEAR(probing_s / estimate_s, 1.0, 0.01) << "probing " << probing_s << " s, estimate " << estimate_s << " s";
+  const json result = file(JobFile::result);
+  EXPECT_NEAR(result.at("probing_time_s").get<double>(), probing_s, 1e-6);
+  EXPECT_NEAR(result.at("estimate_s").get<double>(), estimate_s, 1e-9);
+  RecordProperty("probing_s", std::to_string(probing_s));
+  RecordProperty("estimate_s", std::to_string(estimate_s));
+
+  expect_every_touch_once();
+  EXPECT_EQ(contacts_, static_cast<int>(planned_touches()));
+  EXPECT_EQ(result.at("registration_method"), "given");
+  EXPECT_EQ(file(JobFile::registration).at("tip"), "T1");
+  EXPECT_LE((ball() - hal::Vec3(-100, -100, 60)).norm(), 1e-6) << "the program ends home";
+  EXPECT_FALSE(link_->touch_in_progress());
+}
+
+TEST_F(JobRunnerTest, DoneAgainFromTheJournalWithoutMotionWhenOnlyTheResultWasMissing) {
+  start();
+  ASSERT_EQ(run(), JobState::done) << reason_;
+  std::filesystem::remove(store_->path(id_, JobFile::result));
+  const std::size_t commands = recorder_->commands.size();
+  ASSERT_EQ(run(), JobState::done) << reason_;
+  EXPECT_EQ(recorder_->commands.size(), commands) << "the result was made again with motion";
+  EXPECT_NO_THROW(file(JobFile::result));
+}
+
+// --- failed
+
+TEST_F(JobRunnerTest, FailedModelNamesTheFile) {
+  start({{"model", "file:missing.ply"}});
+  EXPECT_EQ(run(), JobState::failed);
+  EXPECT_THAT(reason_, HasSubstr("missing.ply"));
+  EXPECT_TRUE(recorder_->commands.empty()) << "the machine moved for a job without a model";
+}
+
+TEST_F(JobRunnerTest, FailedPlanWhenThePartLeavesNoClearancePlane) {
+  // Registered 420 mm higher than it stands: its top in M (z 461) leaves no room for the ball and
+  // a gap below the travel box's top (z 450).
+  start({{"registration", given_corners(sim_block(), Eigen::Vector3d(0, 0, 420))}});
+  EXPECT_EQ(run(), JobState::failed);
+  EXPECT_THAT(reason_, HasSubstr("cannot plan the job"));
+  EXPECT_THAT(reason_, HasSubstr("clearance plane"));
+}
+
+TEST_F(JobRunnerTest, FailedRegistrationNamesTheCorner) {
+  json corners = given_corners(sim_block());
+  corners["corners"][2]["machine"][0] = corners["corners"][2]["machine"][0].get<double>() + 5;
+  start({{"registration", corners}});
+  EXPECT_EQ(run(), JobState::failed);
+  EXPECT_THAT(reason_, HasSubstr("corner 3"));
+  EXPECT_FALSE(store_->read(id_, JobFile::registration));
+  EXPECT_TRUE(journal().empty());
+}
+
+// --- cancelled
+
+TEST_F(JobRunnerTest, CancelledWhilePlanning) {
+  start();
+  control_.cancel = true;  // heard by the feature extraction's next step
+  runner_->run(false, false);
+  EXPECT_EQ(states_.back(), JobState::cancelled);
+  EXPECT_EQ(reason_, "cancelled by the operator");
+  EXPECT_TRUE(journal().empty());
+}
+
+TEST_F(JobRunnerTest, CancelledBetweenTouchesLeavesTheBallOnTheClearancePlane) {
+  start();
+  after_touch_ = [this](int made) {
+    if (made == 5) control_.cancel = true;
+  };
+  EXPECT_EQ(run(), JobState::cancelled);
+  EXPECT_EQ(journal().size(), 5u);
+  EXPECT_GE(ball().z(), 60 - 1e-9);
+  EXPECT_FALSE(link_->touch_in_progress());
+}
+
+TEST_F(JobRunnerTest, CancelledMidTouchLeavesAlongTheSearchLine) {
+  start();
+  // The cancel comes as touch 8's descent is sent: the touch ends before its probe, and the ball
+  // leaves the way it came in.
+  int descents = 0;
+  recorder_->before = [&](std::size_t, const RecordedCommand& c) {
+    if (c.kind == RecordedCommand::Kind::move && journal().size() == 7 && c.move.target.z() < 59 && ++descents == 1)
+      control_.cancel = true;
+  };
+  EXPECT_EQ(run(), JobState::cancelled);
+  EXPECT_EQ(journal().size(), 7u);
+  EXPECT_EQ(recorder_->commands.back().kind, RecordedCommand::Kind::move);
+  EXPECT_GE(ball().z(), 60 - 1e-9);
+  EXPECT_FALSE(link_->touch_in_progress());
+}
+
+// --- paused, and resumed
+
+TEST_F(JobRunnerTest, PausedByTheOperatorResumesWithEveryTouchOnce) {
+  start();
+  after_touch_ = [this](int made) {
+    if (made == 12) control_.pause = true;
+  };
+  EXPECT_EQ(run(), JobState::paused);
+  EXPECT_EQ(reason_, "operator pause");
+  EXPECT_EQ(journal().size(), 12u);
+  after_touch_ = nullptr;
+  EXPECT_EQ(run(), JobState::done) << reason_;
+  expect_every_touch_once();
+}
+
+TEST_F(JobRunnerTest, PausedByAStopResumesWithEveryTouchOnce) {
+  start();
+  recorder_->before = [&](std::size_t, const RecordedCommand& c) {
+    if (c.kind == RecordedCommand::Kind::probe && journal().size() == 9 && !control_.operator_stop)
+      control_.operator_stop = true;  // machine.stop as this probe goes out: the job holds after it
+  };
+  EXPECT_EQ(run(), JobState::paused);
+  EXPECT_EQ(reason_, "operator stop");
+  ASSERT_TRUE(link_->touch_in_progress()) << "stopped inside a touch: its line waits for the next mover";
+  recorder_->before = nullptr;
+  EXPECT_EQ(run(), JobState::done) << reason_;
+  expect_every_touch_once();
+  EXPECT_FALSE(link_->touch_in_progress());
+}
+
+TEST_F(JobRunnerTest, PausedByAMachineFaultResumesWithEveryTouchOnce) {
+  // A spurious trigger as the simulator's 30th motion starts: an early trigger, not a touch.
+  start({}, {{"faults", {{"spurious_trigger_at_motion", 30}}}});
+  EXPECT_EQ(run(), JobState::paused);
+  ASSERT_TRUE(fault_);
+  EXPECT_EQ(fault_->kind, "EarlyTrigger");
+  EXPECT_THAT(reason_, HasSubstr("machine fault"));
+  EXPECT_EQ(run(), JobState::done) << reason_;
+  expect_every_touch_once();
+}
+
+// The jobs folder on a small disk of its own (the touch file elsewhere), filled after the sixth
+// touch: the journal's last page still takes a few lines, and the touch whose line does not fit is
+// made but not journalled. It is kept, and journalled first when the job goes on, not made again.
+TEST_F(JobRunnerTest, PausedWhenTheJournalCannotBeWrittenKeepsTheTouch) {
+  const std::filesystem::path disk_dir = fresh_folder("runner-disk") / "jobs";
+  test::SmallTmpfs disk(disk_dir, 4 << 20);
+  if (!disk.mounted()) GTEST_SKIP() << disk.error();
+  start({}, {}, disk_dir);
+  after_touch_ = [&](int made) {
+    if (made == 6) disk.fill();
+  };
+  const auto probes = [this] {
+    return static_cast<std::size_t>(std::count_if(recorder_->commands.begin(), recorder_->commands.end(),
+                                                  [](const RecordedCommand& c) { return c.kind == RecordedCommand::Kind::probe; }));
+  };
+  EXPECT_EQ(run(), JobState::paused);
+  ASSERT_TRUE(fault_);
+  EXPECT_EQ(fault_->kind, "StorageFull");
+  EXPECT_THAT(reason_, HasSubstr("storage full"));
+  const std::size_t kept = journal().size();
+  EXPECT_GT(kept, 6u);
+  EXPECT_EQ(probes(), kept + 1) << "the touch that did not fit was made";
+  after_touch_ = nullptr;
+  disk.unfill();
+  EXPECT_EQ(run(), JobState::done) << reason_;
+  expect_every_touch_once();
+  EXPECT_EQ(probes(), planned_touches()) << "the kept touch was made again";
+}
+
+TEST_F(JobRunnerTest, PausedWhenTheTipIsNotTheRegisteredOne) {
+  start();
+  after_touch_ = [this](int made) {
+    if (made == 4) control_.pause = true;
+  };
+  EXPECT_EQ(run(), JobState::paused);
+  after_touch_ = nullptr;
+  link_->cmm().select_tip("T2");  // someone changed the tip during the hold
+  EXPECT_EQ(run(), JobState::paused);
+  EXPECT_THAT(reason_, HasSubstr("registered with tip T1 but the machine's active tip is T2"));
+  link_->cmm().select_tip("T1");
+  // A qualification the machine now reports that the job's touches were not made under.
+  description::TipQualification q;
+  q.ball_radius_mm = 0.9991;
+  q.time_utc = "2026-12-01T08:00:00Z";
+  link_->cmm().record_qualification("T1", q);
+  EXPECT_EQ(run(), JobState::paused);
+  ASSERT_TRUE(fault_);
+  EXPECT_EQ(fault_->kind, "Qualification");
+  EXPECT_THAT(reason_, HasSubstr("tip T1's qualification changed"));
+  EXPECT_EQ(journal().size(), 4u);
+}
+
+// --- interrupted
+
+TEST_F(JobRunnerTest, InterruptedByShutdownResumesAfterRehoming) {
+  start();
+  after_touch_ = [this](int made) {
+    if (made == 3) control_.shutdown = true;
+  };
+  EXPECT_EQ(run(), JobState::interrupted);
+  EXPECT_EQ(reason_, "cmmd stopped during the job");
+  after_touch_ = nullptr;
+  const std::size_t before = recorder_->commands.size();
+  EXPECT_EQ(run(true), JobState::done) << reason_;
+  EXPECT_EQ(recorder_->commands[before].kind, RecordedCommand::Kind::home) << "an interrupted job homes first";
+  expect_every_touch_once();
+}
+
+}  // namespace
+}  // namespace cmm::daemon
