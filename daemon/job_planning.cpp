@@ -1,70 +1,26 @@
 #include "daemon/job_planning.hpp"
 
-#include <cmath>
-#include <sstream>
-#include <variant>
-
 #include "daemon/rpc_error.hpp"
-#include "geometry/file_error.hpp"
-#include "geometry/mesh_io.hpp"
-#include "planner/model_limits.hpp"
 
 namespace cmm::daemon {
 
 ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
                                     const description::TravelBox& travel_box, const geometry::CancelCheck& cancel) {
-  ReferenceModel m;
-  geometry::ReadResult read;
-  try {
-    read = geometry::read_model(file);
-  } catch (const std::exception& e) {
-    throw RpcError(rpc_code::model_error, e.what(), {{"file", file.string()}});
-  }
-  if (std::holds_alternative<geometry::PointCloud>(read.model))
-    throw RpcError(rpc_code::model_error,
-                   file.string() + " holds a point cloud, not a mesh: meshing a raw scan is not built yet",
-                   {{"file", file.string()}});
-  m.mesh = std::get<geometry::TriangleMesh>(std::move(read.model));
-  if (m.mesh.faces.rows() == 0)
-    throw RpcError(rpc_code::model_error, file.string() + ": no usable triangles left after dropping degenerate ones",
-                   {{"file", file.string()}});
-  m.mesh.vertices *= request.scale;
-  if (!m.mesh.vertices.allFinite())
-    throw RpcError(rpc_code::model_error, file.string() + ": scale takes coordinates beyond a double's range",
-                   {{"file", file.string()}});
-  const planner::ModelLimits limits;
-  try {
-    std::ostringstream source;
-    source << file.string() << " (scale " << request.scale << ")";
-    planner::check_model_limits(m.mesh, travel_box, source.str(), limits);
-  } catch (const planner::ModelRefused& e) {
-    throw RpcError(rpc_code::model_error, e.what(), {{"file", file.string()}, {"kind", "too_large"}});
-  }
-  m.inputs.model_file = file;
-  m.inputs.scale = request.scale;
-  m.inputs.spacing = request.spacing_mm;
-  m.inputs.feature_angle_deg = request.feature_angle_deg;
-  m.inputs.delta = request.delta_mm;
-  m.inputs.delta_source = "job request (or cmmd.json's job.delta_mm)";
-  m.inputs.read_report = read.report;
-  m.inputs.vertex_count = static_cast<std::size_t>(m.mesh.vertices.rows());
-  m.inputs.face_count = static_cast<std::size_t>(m.mesh.faces.rows());
-  geometry::FeatureModelOptions options;
+  planner::ReferenceModelOptions options;
+  options.scale = request.scale;
   options.spacing = request.spacing_mm;
-  options.features.angle_deg = request.feature_angle_deg;
-  options.max_points = limits.max_edge_points;
+  options.feature_angle_deg = request.feature_angle_deg;
   options.cancel = cancel;
   try {
-    m.features = geometry::extract_features(m.mesh, options);
-  } catch (const geometry::Cancelled&) {
-    throw;
-  } catch (const geometry::TooManyPoints& e) {
-    throw RpcError(rpc_code::model_error, file.string() + ": " + e.what(),
-                   {{"file", file.string()}, {"kind", "too_many_points"}, {"points", e.points}, {"limit", e.limit}});
-  } catch (const std::exception& e) {
-    throw RpcError(rpc_code::model_error, file.string() + ": " + e.what(), {{"file", file.string()}});
+    ReferenceModel m = planner::load_reference_model(file, travel_box, options);
+    m.inputs.delta = request.delta_mm;
+    m.inputs.delta_source = "job request (or cmmd.json's job.delta_mm)";
+    return m;
+  } catch (const planner::ModelError& e) {
+    nlohmann::json data = {{"file", e.file.string()}, {"kind", planner::to_string(e.kind)}};
+    if (e.kind == planner::ModelError::Kind::too_many_points) data.update({{"points", e.points}, {"limit", e.limit}});
+    throw RpcError(rpc_code::model_error, e.what(), data);
   }
-  return m;
 }
 
 description::MachineDescription machine_for_job(const description::MachineDescription& configured,

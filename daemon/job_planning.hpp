@@ -14,19 +14,15 @@
 #include "hal/description/machine_description.hpp"
 #include "planner/measurement_plan.hpp"
 #include "planner/plan_json.hpp"
+#include "planner/reference_model.hpp"
 
 namespace cmm::daemon {
 
-struct ReferenceModel {
-  geometry::TriangleMesh mesh;  // S, mm
-  geometry::FeatureModel features;
-  planner::PlanInputs inputs;   // what the plan JSON records of its inputs
-};
+using planner::ReferenceModel;
 
-// Throws RpcError model_error naming the file (and line, when the reader knows it) for a mesh that
-// cannot be read, a point cloud, a mesh with nothing left after cleaning, or one that
-// planner::check_model_limits refuses for `travel_box` (before its features are looked for);
-// geometry::Cancelled when `cancel` asks.
+// planner::load_reference_model with the request's scale, spacing and angle (and its δ recorded for
+// the plan): a ModelError becomes RpcError model_error, data {"file", "kind"} (and "points",
+// "limit" for too many points); geometry::Cancelled when `cancel` asks.
 ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
                                     const description::TravelBox& travel_box, const geometry::CancelCheck& cancel = {});
 

@@ -15,14 +15,13 @@
 #include "geometry/atomic_file.hpp"
 #include "geometry/feature_model.hpp"
 #include "geometry/file_error.hpp"
-#include "geometry/mesh_io.hpp"
-#include "planner/dmis_export.hpp"
 #include "hal/description/json_fields.hpp"
 #include "hal/description/machine_description.hpp"
-#include "planner/measurement_plan.hpp"
-#include "planner/model_limits.hpp"
-#include "planner/plan_json.hpp"
 #include "hal/description/plate.hpp"
+#include "planner/dmis_export.hpp"
+#include "planner/measurement_plan.hpp"
+#include "planner/plan_json.hpp"
+#include "planner/reference_model.hpp"
 #include "planner/registration.hpp"
 
 namespace {
@@ -79,30 +78,6 @@ void choose_tip(description::MachineDescription& machine, Options& o) {
                                 machine.tip().id + " with its ball changed to it is unusable (" + why + ")");
   machine.tips.push_back(tip);
   machine.active_tip = tip.id;
-}
-
-geometry::TriangleMesh read_mesh(const std::string& path, const description::MachineDescription& machine,
-                                 planner::PlanInputs& inputs) {
-  geometry::ReadResult read = geometry::read_model(path);
-  if (const auto* cloud = std::get_if<geometry::PointCloud>(&read.model))
-    throw std::invalid_argument(path + " holds a point cloud (" + std::to_string(cloud->points.rows()) +
-                                " points, no faces).\n  Meshing a raw scan (thinning and triangulation, thesis Ch. 3-4)"
-                                " is not built yet: give a triangle mesh (STL, PLY, OBJ or OFF).");
-  geometry::TriangleMesh mesh = std::get<geometry::TriangleMesh>(std::move(read.model));
-  if (mesh.faces.rows() == 0)
-    throw std::invalid_argument(path + ": no usable triangles left after dropping degenerate ones");
-  mesh.vertices *= inputs.scale;
-  if (!mesh.vertices.allFinite()) {
-    std::ostringstream message;
-    message << path << ": --scale " << inputs.scale << " takes coordinates beyond the range of a double";
-    throw std::invalid_argument(message.str());
-  }
-  planner::check_model_limits(mesh, machine.travel_box, path + " (scale " + format_mm(inputs.scale) + ")");
-  inputs.model_file = path;
-  inputs.read_report = read.report;
-  inputs.vertex_count = static_cast<std::size_t>(mesh.vertices.rows());
-  inputs.face_count = static_cast<std::size_t>(mesh.faces.rows());
-  return mesh;
 }
 
 // An output that could not be written: exit 1, not a bad input.
@@ -179,8 +154,19 @@ int plan(Options o) {
       o.machine.empty() ? description::default_machine() : description::read_machine(o.machine);
   if (o.machine.empty()) inputs.notes.push_back("no --machine given: the default machine description (config/machine.json)");
   choose_tip(machine, o);
-  const geometry::TriangleMesh mesh = read_mesh(o.model, machine, inputs);
-  times.done("read");
+  planner::ReferenceModelOptions model_options;
+  model_options.scale = inputs.scale;
+  model_options.spacing = inputs.spacing;
+  model_options.feature_angle_deg = inputs.feature_angle_deg;
+  planner::ReferenceModel reference = planner::load_reference_model(o.model, machine.travel_box, model_options);
+  reference.inputs.probe_radius = inputs.probe_radius;
+  reference.inputs.delta = inputs.delta;
+  reference.inputs.delta_source = inputs.delta_source;
+  reference.inputs.notes = inputs.notes;
+  inputs = reference.inputs;
+  const geometry::TriangleMesh& mesh = reference.mesh;
+  const geometry::FeatureModel& model = reference.features;
+  times.done("model");
 
   std::optional<planner::RegistrationResult> registration;
   Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
@@ -194,12 +180,7 @@ int plan(Options o) {
     inputs.notes.push_back("no registration given: T_M_S is taken as identity (machine coordinates = scan coordinates)");
   }
 
-  geometry::FeatureModelOptions feature_options;
-  feature_options.spacing = inputs.spacing;
-  feature_options.features.angle_deg = inputs.feature_angle_deg;
-  feature_options.max_points = planner::ModelLimits{}.max_edge_points;
-  const geometry::FeatureModel model = geometry::extract_features(mesh, feature_options);
-  times.done("features");
+  times.done("registration");
 
   planner::MeasurementPlanOptions plan_options;
   plan_options.touch.radius = inputs.probe_radius;
@@ -267,8 +248,8 @@ int main(int argc, char** argv) {
   } catch (const std::invalid_argument& error) {  // an input the planner cannot use, named by the message
     std::cerr << "cmm-plan: " << error.what() << '\n';
     return 2;
-  } catch (const geometry::TooManyPoints& error) {
-    std::cerr << "cmm-plan: " << o.model << ": " << error.what() << '\n';
+  } catch (const planner::ModelError& error) {
+    std::cerr << "cmm-plan: " << error.what() << '\n';
     return 2;
   } catch (const WriteError& error) {
     std::cerr << "cmm-plan: " << error.what() << '\n';

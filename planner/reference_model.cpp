@@ -1,0 +1,79 @@
+// Model file to reference model; see reference_model.hpp.
+#include "planner/reference_model.hpp"
+
+#include <sstream>
+#include <variant>
+
+#include "geometry/mesh_io.hpp"
+
+namespace cmm::planner {
+
+const char* to_string(ModelError::Kind kind) {
+  switch (kind) {
+    case ModelError::Kind::unreadable: return "unreadable";
+    case ModelError::Kind::point_cloud: return "point_cloud";
+    case ModelError::Kind::empty: return "empty";
+    case ModelError::Kind::out_of_range: return "out_of_range";
+    case ModelError::Kind::too_large: return "too_large";
+    case ModelError::Kind::too_many_points: return "too_many_points";
+    case ModelError::Kind::features: return "features";
+  }
+  return "?";
+}
+
+ReferenceModel load_reference_model(const std::filesystem::path& file, const description::TravelBox& travel_box,
+                                    const ReferenceModelOptions& options) {
+  using Kind = ModelError::Kind;
+  const std::string name = file.string();
+  geometry::ReadResult read;
+  try {
+    read = geometry::read_model(file);
+  } catch (const std::exception& e) {  // FileError names the file and the line or byte
+    throw ModelError(Kind::unreadable, file, e.what());
+  }
+  if (const auto* cloud = std::get_if<geometry::PointCloud>(&read.model))
+    throw ModelError(Kind::point_cloud, file,
+                     name + " holds a point cloud (" + std::to_string(cloud->points.rows()) +
+                         " points, no faces). Meshing a raw scan (thinning and triangulation, thesis Ch. 3-4) is not "
+                         "built yet: give a triangle mesh (STL, PLY, OBJ or OFF).");
+  ReferenceModel m;
+  m.mesh = std::get<geometry::TriangleMesh>(std::move(read.model));
+  if (m.mesh.faces.rows() == 0)
+    throw ModelError(Kind::empty, file, name + ": no usable triangles left after dropping degenerate ones");
+  m.mesh.vertices *= options.scale;
+  std::ostringstream source;
+  source << name << " (scale " << options.scale << ")";
+  if (!m.mesh.vertices.allFinite())
+    throw ModelError(Kind::out_of_range, file, source.str() + ": the scale takes coordinates beyond the range of a double");
+  try {
+    check_model_limits(m.mesh, travel_box, source.str(), options.limits);
+  } catch (const ModelRefused& e) {
+    throw ModelError(Kind::too_large, file, e.what());
+  }
+
+  PlanInputs& in = m.inputs;
+  in.model_file = file;
+  in.scale = options.scale;
+  in.spacing = options.spacing;
+  in.feature_angle_deg = options.feature_angle_deg;
+  in.read_report = read.report;
+  in.vertex_count = static_cast<std::size_t>(m.mesh.vertices.rows());
+  in.face_count = static_cast<std::size_t>(m.mesh.faces.rows());
+  geometry::FeatureModelOptions features;
+  features.spacing = options.spacing;
+  features.features.angle_deg = options.feature_angle_deg;
+  features.max_points = options.limits.max_edge_points;
+  features.cancel = options.cancel;
+  try {
+    m.features = geometry::extract_features(m.mesh, features);
+  } catch (const geometry::Cancelled&) {
+    throw;
+  } catch (const geometry::TooManyPoints& e) {
+    throw ModelError(Kind::too_many_points, file, name + ": " + e.what(), e.points, e.limit);
+  } catch (const std::exception& e) {
+    throw ModelError(Kind::features, file, name + ": " + e.what());
+  }
+  return m;
+}
+
+}  // namespace cmm::planner

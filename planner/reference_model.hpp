@@ -1,0 +1,60 @@
+// The reference model a plan is made on, from a model file: read, scaled to mm, held against the
+// model limits, and its features extracted. The one loader cmm-plan and cmmd share, and so the place
+// where the scan front end (a raw cloud thinned and triangulated, thesis Ch. 3-4) plugs in.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "geometry/cancellation.hpp"
+#include "geometry/feature_model.hpp"
+#include "hal/description/machine_description.hpp"
+#include "planner/model_limits.hpp"
+#include "planner/plan_json.hpp"
+
+namespace cmm::planner {
+
+struct ReferenceModel {
+  geometry::TriangleMesh mesh;  // S, mm
+  geometry::FeatureModel features;
+  PlanInputs inputs;  // what the plan JSON records of its inputs: file, scale, spacing, angle, read report
+};
+
+struct ReferenceModelOptions {
+  double scale = 1;  // model units to mm
+  double spacing = 2;
+  double feature_angle_deg = 30;
+  ModelLimits limits;
+  geometry::CancelCheck cancel;  // polled between the steps of feature extraction
+};
+
+// Why a model file gives no reference model; what() names the file and, where its reader knows it,
+// the line or byte.
+class ModelError : public std::runtime_error {
+ public:
+  enum class Kind {
+    unreadable,       // the reader refused the file
+    point_cloud,      // points without faces: a raw scan, which the scan front end will mesh
+    empty,            // no triangles left after the degenerate ones were dropped
+    out_of_range,     // the scale takes coordinates beyond a double's range
+    too_large,        // planner::check_model_limits refused it
+    too_many_points,  // its feature curves would give more reference points than the limit
+    features,         // feature extraction failed for another reason
+  };
+  ModelError(Kind kind, std::filesystem::path file, const std::string& message, std::size_t points = 0,
+             std::size_t limit = 0)
+      : std::runtime_error(message), kind(kind), file(std::move(file)), points(points), limit(limit) {}
+  Kind kind;
+  std::filesystem::path file;
+  std::size_t points = 0, limit = 0;  // too_many_points only
+};
+const char* to_string(ModelError::Kind kind);  // "unreadable", "point_cloud", …
+
+// Throws ModelError, or geometry::Cancelled when options.cancel asks. `travel_box` is the machine's,
+// for the model limits (a size check: the frames differ before registration).
+ReferenceModel load_reference_model(const std::filesystem::path& file, const description::TravelBox& travel_box,
+                                    const ReferenceModelOptions& options = {});
+
+}  // namespace cmm::planner
