@@ -19,8 +19,8 @@
 #include <asio/read_until.hpp>
 #include <asio/write.hpp>
 
-#include "daemon/json_rpc.hpp"
-#include "daemon/rpc_client.hpp"
+#include "daemon/client/json_rpc.hpp"
+#include "daemon/client/rpc_client.hpp"
 #include "daemon/rpc_server.hpp"
 
 namespace {

@@ -1,4 +1,4 @@
-// See auth_throttle.hpp.
+// The token bucket that throttles server.auth guesses.
 #include "daemon/auth_throttle.hpp"
 
 #include <algorithm>

@@ -11,10 +11,10 @@
 #include <optional>
 #include <string>
 
-#include "daemon/model_upload.hpp"
-#include "daemon/progress_bar.hpp"
-#include "daemon/rpc_client.hpp"
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/model_upload.hpp"
+#include "daemon/client/progress_bar.hpp"
+#include "daemon/client/rpc_client.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "hal/serial_ports.hpp"
 
 namespace {

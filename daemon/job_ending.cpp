@@ -1,7 +1,7 @@
 // The one mapping from what ended a run to the job's state; see job_ending.hpp.
 #include "daemon/job_ending.hpp"
 
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "daemon/storage_error.hpp"
 #include "geometry/cancellation.hpp"
 #include "hal/fault.hpp"

@@ -1,3 +1,4 @@
+// The job queue: submit, the worker that runs one job at a time, and the job.* methods' state rules.
 #include "daemon/job_manager.hpp"
 
 #include <chrono>
@@ -5,7 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include "hal/description/eigen_json.hpp"
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "daemon/storage_error.hpp"
 #include "hal/utc_time.hpp"
 

@@ -1,6 +1,8 @@
+// The machine-free steps of a job: the reference model for a request, the description a plan is
+// made for, and the plan.
 #include "daemon/job_planning.hpp"
 
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 
 namespace cmm::daemon {
 

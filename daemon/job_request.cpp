@@ -4,7 +4,7 @@
 
 #include <set>
 
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "hal/description/json_fields.hpp"
 
 namespace cmm::daemon {

@@ -1,10 +1,12 @@
+// The result files of a job (result.json, CSV, merged cloud) from its plan and touches, with what
+// traceability needs.
 #include "daemon/job_result.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
-#include "daemon/sha256.hpp"
+#include "daemon/client/sha256.hpp"
 #include "planner/measured_cloud.hpp"
 #include "planner/plan_compensation.hpp"
 #include "planner/result_csv.hpp"

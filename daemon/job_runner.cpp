@@ -8,7 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/job_result.hpp"
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "daemon/touch_motion.hpp"
 #include "hal/fault.hpp"
 #include "hal/utc_time.hpp"

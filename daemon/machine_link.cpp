@@ -1,3 +1,4 @@
+// cmmd's one machine: bringing the driver up, leasing it, the touch in progress, and qualification.
 #include "daemon/machine_link.hpp"
 
 #include <fstream>

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "geometry/atomic_file.hpp"
-#include "daemon/base64.hpp"
-#include "daemon/rpc_error.hpp"
-#include "daemon/sha256.hpp"
+#include "daemon/client/base64.hpp"
+#include "daemon/client/rpc_error.hpp"
+#include "daemon/client/sha256.hpp"
 #include "daemon/storage_error.hpp"
 #include "geometry/file_error.hpp"
 

@@ -1,9 +1,10 @@
+// plan.preview: plan a request and dry-run its program on a simulator of the reference mesh.
 #include "daemon/plan_preview.hpp"
 
 #include <numbers>
 
 #include "daemon/job_planning.hpp"
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "daemon/touch_motion.hpp"
 #include "hal/fault.hpp"
 #include "planner/rigid_fit.hpp"

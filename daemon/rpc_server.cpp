@@ -1,3 +1,5 @@
+// The JSON-RPC server: listening on TCP and the Unix socket, sessions, tokens, notifications and
+// the shared byte budgets.
 #include "daemon/rpc_server.hpp"
 
 #include <spdlog/spdlog.h>

@@ -17,7 +17,7 @@
 
 #include "daemon/auth_throttle.hpp"
 #include "daemon/byte_budget.hpp"
-#include "daemon/json_rpc.hpp"
+#include "daemon/client/json_rpc.hpp"
 #include "daemon/worker_pools.hpp"
 
 namespace cmm::daemon {

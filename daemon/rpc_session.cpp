@@ -1,4 +1,5 @@
-// See rpc_session.hpp.
+// One client connection: reading lines, dispatching requests to the worker pools, sending replies
+// and notifications within its budget.
 #include "daemon/rpc_session.hpp"
 
 #include <spdlog/spdlog.h>

@@ -15,7 +15,7 @@
 #include <asio/steady_timer.hpp>
 
 #include "daemon/byte_budget.hpp"
-#include "daemon/json_rpc.hpp"
+#include "daemon/client/json_rpc.hpp"
 #include "daemon/worker_pools.hpp"
 
 namespace cmm::daemon {

@@ -1,3 +1,4 @@
+// The machine.*, model.*, plan.* and job.* methods cmmd serves, each with the role it needs.
 #include "daemon/service_methods.hpp"
 
 #include <cstdint>

@@ -6,7 +6,7 @@
 
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_manager.hpp"
-#include "daemon/json_rpc.hpp"
+#include "daemon/client/json_rpc.hpp"
 #include "daemon/machine_link.hpp"
 #include "daemon/model_store.hpp"
 

@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 
 namespace cmm::daemon {
 

@@ -1,4 +1,4 @@
-// See worker_pools.hpp.
+// The worker pools requests run on, one per role and one for planning, each with its queue.
 #include "daemon/worker_pools.hpp"
 
 #include <algorithm>

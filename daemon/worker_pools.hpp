@@ -10,7 +10,7 @@
 #include <asio/thread_pool.hpp>
 
 #include "daemon/byte_budget.hpp"
-#include "daemon/json_rpc.hpp"
+#include "daemon/client/json_rpc.hpp"
 
 namespace cmm::daemon {
 

@@ -1,3 +1,5 @@
+// Distance from a point to the nearest true edge of an analytic part, for holding measured edge
+// points against the truth.
 #include "geometry/true_edge_distance.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// See model_limits.hpp.
+// The model limits: counts first, then the model's extent against the travel box's diagonal.
 #include "planner/model_limits.hpp"
 
 #include <algorithm>

@@ -10,9 +10,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "daemon/base64.hpp"
-#include "daemon/rpc_error.hpp"
-#include "daemon/sha256.hpp"
+#include "daemon/client/base64.hpp"
+#include "daemon/client/rpc_error.hpp"
+#include "daemon/client/sha256.hpp"
 #include "fresh_folder.hpp"
 
 namespace cmm::daemon {

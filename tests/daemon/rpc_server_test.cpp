@@ -22,7 +22,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "daemon/rpc_client.hpp"
+#include "daemon/client/rpc_client.hpp"
 
 namespace cmm::daemon {
 namespace {

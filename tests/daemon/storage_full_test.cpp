@@ -14,11 +14,11 @@
 #include <gtest/gtest.h>
 
 #include "geometry/atomic_file.hpp"
-#include "daemon/base64.hpp"
+#include "daemon/client/base64.hpp"
 #include "daemon/job_store.hpp"
 #include "daemon/model_store.hpp"
-#include "daemon/rpc_error.hpp"
-#include "daemon/sha256.hpp"
+#include "daemon/client/rpc_error.hpp"
+#include "daemon/client/sha256.hpp"
 #include "daemon/storage_error.hpp"
 #include "daemon/touch_journal.hpp"
 #include "fresh_folder.hpp"

@@ -6,7 +6,7 @@
 
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_request.hpp"
-#include "daemon/json_rpc.hpp"
+#include "daemon/client/json_rpc.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -14,10 +14,10 @@
 #include <asio/io_context.hpp>
 #include <spdlog/spdlog.h>
 
-#include "daemon/base64.hpp"
+#include "daemon/client/base64.hpp"
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_request.hpp"
-#include "daemon/json_rpc.hpp"
+#include "daemon/client/json_rpc.hpp"
 #include "daemon/rpc_server.hpp"
 #include "fuzz_support.hpp"
 #include "planner/registration.hpp"

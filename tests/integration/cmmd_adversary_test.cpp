@@ -15,9 +15,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cmmd_instance.hpp"
-#include "daemon/model_upload.hpp"
-#include "daemon/rpc_client.hpp"
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/model_upload.hpp"
+#include "daemon/client/rpc_client.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "rpc_exchange.hpp"
 #include "tests/daemon/fresh_folder.hpp"
 #include "tests/tools/run_command.hpp"

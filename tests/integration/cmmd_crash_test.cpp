@@ -25,7 +25,7 @@
 #include "cmmd_instance.hpp"
 #include "job_watch.hpp"
 #include "scratch_folder.hpp"
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "daemon/touch_journal.hpp"
 #include "geometry/analytic_parts.hpp"
 #include "geometry/true_edge_distance.hpp"

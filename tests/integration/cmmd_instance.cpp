@@ -1,3 +1,5 @@
+// A real cmmd process for the integration tests: its folder and config, its start and ready line,
+// clients to it; and the sample scan, part and registration the job tests share.
 #include "cmmd_instance.hpp"
 
 #include <signal.h>
@@ -7,7 +9,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "daemon/model_upload.hpp"
+#include "daemon/client/model_upload.hpp"
 #include "daemon/touch_journal.hpp"
 #include "tests/tools/run_command.hpp"
 

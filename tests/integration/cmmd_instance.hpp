@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "child_process.hpp"
-#include "daemon/rpc_client.hpp"
+#include "daemon/client/rpc_client.hpp"
 
 namespace cmm::testing {
 

@@ -18,8 +18,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cmmd_instance.hpp"
-#include "daemon/rpc_client.hpp"
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_client.hpp"
+#include "daemon/client/rpc_error.hpp"
 #include "notify_listener.hpp"
 #include "rpc_exchange.hpp"
 #include "tests/daemon/fresh_folder.hpp"

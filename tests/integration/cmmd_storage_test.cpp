@@ -23,9 +23,9 @@
 #include "cmmd_instance.hpp"
 #include "job_watch.hpp"
 #include "scratch_folder.hpp"
-#include "daemon/base64.hpp"
-#include "daemon/rpc_error.hpp"
-#include "daemon/sha256.hpp"
+#include "daemon/client/base64.hpp"
+#include "daemon/client/rpc_error.hpp"
+#include "daemon/client/sha256.hpp"
 #include "daemon/touch_journal.hpp"
 #include "tests/tools/small_tmpfs.hpp"
 

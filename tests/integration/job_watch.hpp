@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "daemon/rpc_client.hpp"
+#include "daemon/client/rpc_client.hpp"
 
 namespace cmm::testing {
 

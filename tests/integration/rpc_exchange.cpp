@@ -1,4 +1,4 @@
-// See rpc_exchange.hpp.
+// Raw JSON-RPC lines to a real cmmd and their replies, for the tests that send what a client would not.
 #include "rpc_exchange.hpp"
 
 #include <gtest/gtest.h>

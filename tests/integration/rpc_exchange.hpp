@@ -6,8 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "daemon/rpc_client.hpp"
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_client.hpp"
+#include "daemon/client/rpc_error.hpp"
 
 namespace cmm::testing {
 

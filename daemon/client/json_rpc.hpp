@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 
 namespace cmm::daemon {
 

@@ -1,4 +1,6 @@
-#include "daemon/rpc_client.hpp"
+// The blocking JSON-RPC client over TCP or the Unix socket: calls, their replies, and notifications
+// read while waiting.
+#include "daemon/client/rpc_client.hpp"
 
 #include <poll.h>
 
@@ -17,7 +19,7 @@
 #include <asio/local/stream_protocol.hpp>
 #include <asio/write.hpp>
 
-#include "daemon/json_rpc.hpp"
+#include "daemon/client/json_rpc.hpp"
 
 namespace cmm::daemon {
 

@@ -1,4 +1,5 @@
-#include "daemon/progress_bar.hpp"
+// The one-line progress bar cmmctl draws while it watches a job.
+#include "daemon/client/progress_bar.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // SHA-256 through OpenSSL's EVP digest API (the low-level SHA256_* calls are deprecated in 3.0).
-#include "daemon/sha256.hpp"
+#include "daemon/client/sha256.hpp"
 
 #include <openssl/evp.h>
 

@@ -7,7 +7,7 @@
 #include <functional>
 #include <string>
 
-#include "daemon/rpc_client.hpp"
+#include "daemon/client/rpc_client.hpp"
 
 namespace cmm::daemon {
 

@@ -1,6 +1,6 @@
 // Base64 through OpenSSL's EVP_EncodeBlock / EVP_DecodeBlock, after checking what they would let
 // through (EVP_DecodeBlock skips blanks and counts padding as zero bytes).
-#include "daemon/base64.hpp"
+#include "daemon/client/base64.hpp"
 
 #include <openssl/evp.h>
 

@@ -1,5 +1,5 @@
 // The JSON-RPC error codes' helpers and the connection roles' names.
-#include "daemon/rpc_error.hpp"
+#include "daemon/client/rpc_error.hpp"
 
 namespace cmm::daemon {
 

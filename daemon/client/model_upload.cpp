@@ -1,10 +1,11 @@
-#include "daemon/model_upload.hpp"
+// Uploading a model file to cmmd in sha256-named base64 chunks, resuming where cmmd says it stands.
+#include "daemon/client/model_upload.hpp"
 
 #include <fstream>
 #include <vector>
 
-#include "daemon/base64.hpp"
-#include "daemon/sha256.hpp"
+#include "daemon/client/base64.hpp"
+#include "daemon/client/sha256.hpp"
 #include "geometry/file_error.hpp"
 
 namespace cmm::daemon {

@@ -1,6 +1,6 @@
 // The JSON-RPC 2.0 dispatcher without a transport: the specification's own examples (§7), every
 // kind of invalid request, roles, handler errors, and the helpers the transport uses.
-#include "daemon/json_rpc.hpp"
+#include "daemon/client/json_rpc.hpp"
 
 #include <numeric>
 #include <stdexcept>

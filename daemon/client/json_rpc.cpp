@@ -1,4 +1,6 @@
-#include "daemon/json_rpc.hpp"
+// JSON-RPC 2.0 messages on the wire: parsing a line (with the byte of any error), building replies,
+// requests and notifications.
+#include "daemon/client/json_rpc.hpp"
 
 #include <spdlog/spdlog.h>
 
