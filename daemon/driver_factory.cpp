@@ -56,4 +56,6 @@ std::unique_ptr<hal::Cmm> make_driver(const std::string& name, const std::string
   return find(name).make(base_dir);
 }
 
+std::unique_ptr<hal::Cmm> make_simulator(const std::string& base_dir) { return make_driver("sim", base_dir); }
+
 }  // namespace cmm::daemon

@@ -23,4 +23,8 @@ std::string canonical_driver_name(const std::string& name);
 // block (the simulator's part mesh, a machine description) resolve against `base_dir`.
 std::unique_ptr<hal::Cmm> make_driver(const std::string& name, const std::string& base_dir);
 
+// The in-process simulator whatever driver the config names: the machine plan.preview dry-runs a
+// program on, standing the reference mesh where the plan puts the part.
+std::unique_ptr<hal::Cmm> make_simulator(const std::string& base_dir);
+
 }  // namespace cmm::daemon

@@ -5,10 +5,11 @@
 
 #include "daemon/job_planning.hpp"
 #include "daemon/client/rpc_error.hpp"
+#include "daemon/driver_factory.hpp"
 #include "daemon/touch_motion.hpp"
+#include "hal/description/eigen_json.hpp"
 #include "hal/fault.hpp"
 #include "planner/rigid_fit.hpp"
-#include "sim/simulated_cmm.hpp"
 
 namespace cmm::daemon {
 
@@ -18,7 +19,7 @@ nlohmann::json pose_json(const Eigen::Isometry3d& T) {
   // sim_config's poses rotate about x, then y, then z: R = Rz·Ry·Rx.
   const Eigen::Vector3d zyx = T.rotation().eulerAngles(2, 1, 0) * (180 / std::numbers::pi);
   const Eigen::Vector3d t = T.translation();
-  return {{"rotation_deg", {zyx[2], zyx[1], zyx[0]}}, {"translation", {t.x(), t.y(), t.z()}}};
+  return {{"rotation_deg", {zyx[2], zyx[1], zyx[0]}}, {"translation", description::vec3_json(t)}};
 }
 
 Eigen::Isometry3d preview_registration(const JobRequest& request, std::vector<std::string>& notes) {
@@ -57,7 +58,7 @@ nlohmann::json sim_block(const std::filesystem::path& model_file, const JobReque
           {"part", {{"mesh", model_file.string()}, {"scale", request.scale}}},
           {"part_pose", pose_json(T_S_P.inverse())},
           {"trigger_sigma_mm", 0},
-          {"home_position", {machine.travel_box.max.x(), machine.travel_box.max.y(), machine.travel_box.max.z()}}};
+          {"home_position", description::vec3_json(machine.travel_box.max)}};
 }
 
 // Back to a machine that moves after a fault: enabled, abort cleared, homed.
@@ -82,7 +83,8 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
   if (!info) notes.push_back("the machine could not be read: planned for the configured tip radii");
   const planner::MeasurementPlan plan = plan_job(model, T_M_S, machine, request, cancel);
 
-  sim::SimulatedCmm cmm;
+  const std::unique_ptr<hal::Cmm> simulator = make_simulator(".");
+  hal::Cmm& cmm = *simulator;
   cmm.configure(sim_block(model_file, request, machine, model.mesh, T_M_S));
   cmm.connect();
   cmm.enable();

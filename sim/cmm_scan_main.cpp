@@ -14,6 +14,7 @@
 
 #include "geometry/analytic_parts.hpp"
 #include "geometry/mesh_io.hpp"
+#include "hal/description/eigen_json.hpp"
 #include "sim/raw_scan.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/scanned_mesh.hpp"
@@ -31,7 +32,6 @@ struct Options {
   std::uint64_t seed = 1;
 };
 
-nlohmann::json vec(const geometry::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 // What registration by a measured plate starts from: the plate's corners as the scan shows them
 // (S is the part's own frame, the frame of the scanned mesh) and where an operator would jog the
@@ -46,8 +46,8 @@ nlohmann::json plate_corners(const sim::SimConfig& config, const Options& o) {
     const geometry::Vec3 c = config.plate.corner(id);
     const geometry::Vec3 s = T_S_P * c + geometry::Vec3(scan_noise(random), scan_noise(random), scan_noise(random));
     const geometry::Vec3 m = config.T_M_P * c + geometry::Vec3(rough(random), rough(random), 0.3 * rough(random));
-    scan.push_back({{"id", id}, {"scan", vec(s)}});
-    machine.push_back({{"id", id}, {"machine", vec(m)}});
+    scan.push_back({{"id", id}, {"scan", description::vec3_json(s)}});
+    machine.push_back({{"id", id}, {"machine", description::vec3_json(m)}});
   }
   return {{"scan_corners", scan}, {"rough_machine", machine}};
 }
@@ -93,7 +93,7 @@ int scan(Options o) {
           {"translation_sigma_mm", view_options.translation_sigma_mm}}}}},
       {"true_faces", part.mesh.faces.rows()},
       {"view_directions", nlohmann::json::array()}};
-  for (const sim::ScanView& view : views) truth["view_directions"].push_back(vec(view.direction));
+  for (const sim::ScanView& view : views) truth["view_directions"].push_back(description::vec3_json(view.direction));
 
   if (!o.mesh.empty()) {
     const sim::ScannedMesh scanned = sim::synthesize_scanned_mesh(

@@ -11,6 +11,7 @@
 
 #include "geometry/analytic_parts.hpp"
 #include "geometry/true_edge_distance.hpp"
+#include "hal/description/eigen_json.hpp"
 #include "sim/sim_config.hpp"
 
 namespace {
@@ -24,7 +25,6 @@ json read_json(const std::string& file) {
   return json::parse(in);
 }
 
-geometry::Vec3 vec(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
 
 struct Stats {
   std::vector<double> values;
@@ -53,7 +53,7 @@ int compare(const std::string& config_file, const std::string& result_file, doub
   double worst = -1;
   for (const json& e : result.at("edge_points")) {
     if (e.value("status", "") != "measured" || !e["measured_M"].is_object()) continue;
-    const double d = geometry::nearest_true_edge(part, T_Part_M * vec(e["measured_M"]["position"])).distance;
+    const double d = geometry::nearest_true_edge(part, T_Part_M * description::vec3_from_json(e["measured_M"]["position"])).distance;
     edges.values.push_back(d);
     over += d > tolerance;
     if (d > worst) {
@@ -64,7 +64,7 @@ int compare(const std::string& config_file, const std::string& result_file, doub
   Stats centres, diameters;
   for (const json& h : result.at("holes")) {
     if (h.value("status", "") != "measured" || !h["measured_M"].is_object()) continue;
-    const geometry::Vec3 c = T_Part_M * vec(h["measured_M"]["centre"]);
+    const geometry::Vec3 c = T_Part_M * description::vec3_from_json(h["measured_M"]["centre"]);
     const geometry::TrueHole* best = nullptr;
     double best_d = 1e300;
     for (const geometry::TrueHole& t : part.holes) {
