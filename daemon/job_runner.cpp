@@ -317,9 +317,20 @@ bool JobRunner::probing_complete() const {
 // --- probing
 
 // One touch, its search line recorded first so that whoever moves next after a stop leaves along it.
-hal::TouchResult JobRunner::touch(const planner::Touch& t, std::span<const planner::Motion> motions) {
+// A stop may end it between motions until the probe has touched; then the result is kept before the
+// way back to the start, so that a stop, a shutdown or a fault on that way loses nothing, and no
+// check stops it there.
+hal::TouchResult JobRunner::touch(const planner::Touch& t, std::span<const planner::Motion> motions,
+                                  const std::function<void(const hal::TouchResult&)>& keep) {
+  const auto is_probe = [](const planner::Motion& m) { return m.kind == planner::MotionKind::probe; };
+  auto back = std::find_if(motions.begin(), motions.end(), is_probe);
+  if (back == motions.end()) throw std::logic_error("touch " + std::to_string(t.id) + " has no probe motion");
+  ++back;
+  hal::Cmm& cmm = env_.machine.cmm();
   env_.machine.enter_touch({t.start, t.direction});
-  const hal::TouchResult r = run_motions(env_.machine.cmm(), motions, [this] { check_stop(); });
+  const hal::TouchResult r = run_motions(cmm, {motions.begin(), back}, [this] { check_stop(); });
+  if (keep) keep(r);
+  run_motions(cmm, {back, motions.end()}, {});
   env_.machine.left_touch();
   return r;
 }
@@ -379,26 +390,30 @@ JobRunner::Touches JobRunner::probe(const planner::MeasurementPlan& plan, const 
   for (const planner::Touch& t : program.touches) {
     if (touches.results.contains(t.id)) continue;
     check_control();
-    if (tip_.reconnected()) tip_.check(cmm.info(), false, machine.active_tip, program.clearance_z);
-    const int q = tip_.current();
-    const hal::TouchResult r =
-        touch(t, motions_from(at, planner::motions_of(program, t.id), t, program.clearance_z, machine));
-    at = t.start;
-    try {
-      journal.append({t.id, r, q});
-    } catch (const std::exception&) {
-      // The touch is made but not kept (a full disk): it waits here and is journalled first when
-      // the job goes on, so it is neither lost nor made twice (unless cmmd stops meanwhile: then
-      // the resume makes it again). The job holds, storage full.
-      unjournaled_.push_back({t.id, r, q});
-      throw;
+    if (tip_.reconnected()) {
+      tip_.check(cmm.info(), false, machine.active_tip, program.clearance_z);
+      at = cmm.status().position;  // a requalification leaves the ball at the reference sphere
     }
-    touches.results[t.id] = r;
-    touches.qualification_of[t.id] = q;
-    remaining_s -= planned_s[t.id];
-    planned_done_s += planned_s[t.id];
-    sink_.touched(t.id, r);
-    report();
+    const int q = tip_.current();
+    const auto keep = [&](const hal::TouchResult& r) {
+      try {
+        journal.append({t.id, r, q});
+      } catch (const std::exception&) {
+        // The touch is made but not kept (a full disk): it waits here and is journalled first when
+        // the job goes on, so it is neither lost nor made twice (unless cmmd stops meanwhile: then
+        // the resume makes it again). The job holds, storage full, the ball on the search line.
+        unjournaled_.push_back({t.id, r, q});
+        throw;
+      }
+      touches.results[t.id] = r;
+      touches.qualification_of[t.id] = q;
+      remaining_s -= planned_s[t.id];
+      planned_done_s += planned_s[t.id];
+      sink_.touched(t.id, r);
+      report();
+    };
+    touch(t, motions_from(at, planner::motions_of(program, t.id), t, program.clearance_z, machine), keep);
+    at = t.start;
   }
   // Home, as the program ends: a finished job leaves the probe clear of the part.
   const std::span<const planner::Motion> home = planner::home_motions_of(program);

@@ -81,7 +81,9 @@ class JobRunner {
   void journal_unjournaled();
   void check_control() const;
   void check_stop() const;  // between the motions of one touch: a stop, a cancel, a shutdown
-  hal::TouchResult touch(const planner::Touch& t, std::span<const planner::Motion> motions);
+  // `keep` (the job's touches: the journal) takes the probe's result before the way back to the start.
+  hal::TouchResult touch(const planner::Touch& t, std::span<const planner::Motion> motions,
+                         const std::function<void(const hal::TouchResult&)>& keep = {});
   // Leaves a touch a stop cut short along its search line; `clear_of_part` (a cancel) also rises to
   // the clearance plane when no touch was in progress. Never throws: what went wrong is returned
   // (and logged), for a caller that must not move on without it.

@@ -47,8 +47,17 @@ void CmmDriver::connect() {
       on_connect();
       lifecycle_ = Lifecycle::connected;
       connecting_ = false;
+      clear_latches(false);  // what the old link reported is history; the machine's own status tells the rest
       return;
-    } catch (const CommLost& e) {
+    } catch (const Fault& e) {
+      // A link that is not there yet, or a machine still booting, may answer the next try; anything
+      // else (a garbled answer: the wrong device or baud; a register map of another version; the
+      // e-stop) will not, so it ends the connect at once with its own kind.
+      if (e.kind() != FaultKind::comm_lost && e.kind() != FaultKind::timeout) {
+        connecting_ = false;
+        on_disconnect();
+        throw;
+      }
       error = e.what();
     } catch (...) {
       connecting_ = false;

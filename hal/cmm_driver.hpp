@@ -17,7 +17,8 @@ class CmmDriver : public Cmm {
  public:
   // configure: refused while connected; the hook parses the block. connect: from configured, up to
   // connect_policy().attempts tries with a doubling backoff, each running on_connect(); a try that
-  // throws CommLost is closed (on_disconnect) and retried, any other fault ends it.
+  // throws CommLost or Timeout is closed (on_disconnect) and retried, any other fault ends it. A link
+  // made clears the fault the last one latched (not an abort).
   void configure(const nlohmann::json& block) final;
   void connect() final;
   void enable() final;
@@ -31,7 +32,7 @@ class CmmDriver : public Cmm {
   MachineStatus status() final;
 
   // Motion: enabled, no abort latched. A fault is latched (status() reports it until the next motion
-  // succeeds or reset()) and drops an enabled machine back to connected.
+  // succeeds, reset() or a new link) and drops an enabled machine back to connected.
   void home() final;
   void move(const Move& move) final;
   TouchResult probe(const ProbeMove& move) final;
@@ -55,7 +56,7 @@ class CmmDriver : public Cmm {
   virtual std::string where() const = 0;
 
   virtual void on_configure(const nlohmann::json& block) = 0;  // description::FieldError for a bad block
-  virtual void on_connect() = 0;     // one try at the link; CommLost when it cannot be made
+  virtual void on_connect() = 0;     // one try at the link; CommLost when it cannot be made, Timeout when unanswered
   virtual void on_enable() {}        // a check before motion is allowed
   virtual void on_disconnect() = 0;  // closes whatever is open; safe to call twice
   virtual description::MachineDescription read_info() = 0;

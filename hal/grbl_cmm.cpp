@@ -42,8 +42,15 @@ GrblSettings grbl_settings_from_json(const nlohmann::json& j, const std::string&
   s.poll_interval_s = b.number("poll_interval_s", s.poll_interval_s, 0.0001, 1);
   s.connect_attempts = b.integer("connect_attempts", s.connect_attempts, 1, 100);
   s.connect_backoff_s = b.number("connect_backoff_s", s.connect_backoff_s, 0, 60);
-  s.machine = description::described(b, "machine", s.machine, base_dir, description::machine_from_json,
-                                     description::read_machine);
+  // Grbl knows nothing of the travel box or the tips, and a sample's box enforced on a real machine
+  // is worse than none: the description is required.
+  if (!b.require("machine", "the machine description: machine.json's schema, inline or a file name")) {
+  } else if (b.member("machine").value() == "") {
+    b.problem("machine", "must name a file or hold the description");
+  } else {
+    s.machine = description::described(b, "machine", s.machine, base_dir, description::machine_from_json,
+                                       description::read_machine);
+  }
   b.finish();
   b.throw_if_problems("grbl driver config");
   return s;
@@ -398,10 +405,9 @@ void GrblCmm::begin_motion() {
 }
 
 description::MachineDescription GrblCmm::read_info() {
+  std::lock_guard lock(mutex_);  // select_tip() and record_qualification() write the tips
   description::MachineDescription info = settings_.machine;
   info.name = "Grbl 1.1 machine on " + settings_.device;
-  std::lock_guard lock(mutex_);  // select_tip() and record_qualification() write these
-  info.tips = settings_.machine.tips;
   info.active_tip = active().id;
   return info;
 }

@@ -259,7 +259,8 @@ RegistrationInput registration_from_json(const json& j, const std::string& sourc
   else
     f.member("plate");
 
-  input.noise_scan_mm = input.noise_machine_mm = f.positive("noise_mm", input.noise_scan_mm);
+  // noise_mm sets both frames' noise; noise_scan_mm and noise_machine_mm override it per frame.
+  if (f.has("noise_mm")) input.noise_scan_mm = input.noise_machine_mm = f.positive("noise_mm", input.noise_scan_mm);
   input.noise_scan_mm = f.positive("noise_scan_mm", input.noise_scan_mm);
   input.noise_machine_mm = f.positive("noise_machine_mm", input.noise_machine_mm);
   if (!f.has("noise_mm") && !(f.has("noise_scan_mm") && f.has("noise_machine_mm")))

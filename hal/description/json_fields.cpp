@@ -1,6 +1,7 @@
 // The field checker: typed reads that note a problem and go on, paths as JSON Pointers.
 #include "hal/description/json_fields.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -85,7 +86,7 @@ void JsonFields::problem(const std::string& key, const std::string& message) {
 
 void JsonFields::problems_of(const FieldError& nested, const std::string& key) {
   read_.insert(key);
-  for (const FieldProblem& p : nested.problems()) problems_->push_back({path(key) + p.pointer, p.message});
+  for (const FieldProblem& p : nested.problems()) problems_->push_back({path(key) + p.pointer, p.message, p.unknown_key});
 }
 
 // --- this value
@@ -194,6 +195,7 @@ JsonFields JsonFields::member(const std::string& key) {
 bool JsonFields::require(const std::string& key, const std::string& what) {
   if (has(key)) return true;
   read_.insert(key);
+  if (present_ && !value_->is_object()) return false;  // expect_object() has said what is wrong here
   problem(key, what.empty() ? "missing" : "missing (" + what + ")");
   return false;
 }
@@ -263,18 +265,22 @@ std::vector<JsonFields> JsonFields::items(const std::string& key) {
 void JsonFields::finish() {
   if (!value_->is_object()) return;  // expect_object() said so
   for (const auto& [key, v] : value_->items())
-    if (!read_.contains(key)) problem(key, read_.empty() ? "unknown key" : "unknown key (known: " + list(read_) + ")");
+    if (!read_.contains(key))
+      problems_->push_back({path(key), read_.empty() ? "unknown key" : "unknown key (known: " + list(read_) + ")", true});
 }
 
 void JsonFields::known(const std::set<std::string>& keys) {
   if (!value_->is_object()) return;
   for (const auto& [key, v] : value_->items())
-    if (!keys.contains(key)) problem(key, "unknown key (known: " + list(keys) + ")");
+    if (!keys.contains(key)) problems_->push_back({path(key), "unknown key (known: " + list(keys) + ")", true});
   for (const auto& [key, v] : value_->items()) read_.insert(key);  // noted once, not again by finish()
 }
 
 void JsonFields::throw_if_problems(const std::string& source) const {
-  if (!problems_->empty()) throw FieldError(source, *problems_);
+  if (problems_->empty()) return;
+  std::vector<FieldProblem> problems = *problems_;
+  std::stable_partition(problems.begin(), problems.end(), [](const FieldProblem& p) { return p.unknown_key; });
+  throw FieldError(source, std::move(problems));
 }
 
 // --- files

@@ -20,6 +20,7 @@ using Vec3 = Eigen::Vector3d;
 struct FieldProblem {
   std::string pointer;  // JSON Pointer of the field ("/tips/0/ball_radius_mm"); "" for the whole input
   std::string message;  // "must be positive, not -1"
+  bool unknown_key = false;  // listed first: a misspelt key is often why another one is missing
 };
 
 // An input refused for its fields (or, at pointer "", as a whole: a file that is not JSON).
@@ -87,7 +88,7 @@ class JsonFields {
   void known(const std::set<std::string>& keys);
   bool ok() const { return problems_->empty(); }  // no problem anywhere in the input so far
   std::size_t problem_count() const { return problems_->size(); }
-  void throw_if_problems(const std::string& source) const;
+  void throw_if_problems(const std::string& source) const;  // unknown keys first, else in reading order
 
  private:
   JsonFields(std::shared_ptr<const nlohmann::json> root, const nlohmann::json* value, std::string pointer,

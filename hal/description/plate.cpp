@@ -122,9 +122,11 @@ void read_hole(JsonFields& f, Plate& plate) {
     }
   // A hole that the plate's own symmetry maps onto itself cannot tell the corners apart.
   for (int k : symmetry_shifts(plate))
-    if ((turned(plate, k, fiducial.centre) - fiducial.centre).norm() < fiducial.diameter_mm)
+    if ((turned(plate, k, fiducial.centre) - fiducial.centre).norm() < fiducial.diameter_mm) {
       f.problem("centre", "the hole sits where the plate's symmetry (corner 1 onto corner " + std::to_string(1 + k) +
                               ") maps it onto itself, so it cannot tell those corners apart: move it toward one corner");
+      return;  // one symmetry says it; a square's three would say it three times
+    }
 }
 
 }  // namespace

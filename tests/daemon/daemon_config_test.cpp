@@ -43,7 +43,8 @@ TEST(DaemonConfig, AnUnknownDriverIsAProblemListingTheKnownOnes) {
 }
 
 TEST(DaemonConfig, SerialIsTheGrblDriverAndNoDriverIsTheSimulator) {
-  EXPECT_EQ(daemon_config_from_json({{"machine", {{"driver", "serial"}, {"device", "/dev/ttyUSB0"}}}}, "cmmd.json", ".").driver,
+  EXPECT_EQ(daemon_config_from_json({{"machine", {{"driver", "serial"}, {"device", "/dev/ttyUSB0"}, {"machine", "config/machine.json"}}}},
+                                    "cmmd.json", CMMD_SOURCE_DIR).driver,
             "grbl");
   EXPECT_EQ(daemon_config_from_json({{"machine", json::object()}}, "cmmd.json", ".").driver, "sim");
 }

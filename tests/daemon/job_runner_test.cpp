@@ -18,6 +18,7 @@
 #include "fresh_folder.hpp"
 #include "geometry/analytic_parts.hpp"
 #include "geometry/mesh_io.hpp"
+#include "hal/fault.hpp"
 #include "recording_cmm.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/simulated_cmm.hpp"
@@ -118,6 +119,11 @@ class JobRunnerTest : public ::testing::Test {
   }
   std::size_t planned_touches() const { return file(JobFile::plan).at("program").size(); }
   hal::Vec3 ball() { return link_->cmm().status().position; }
+  // A move below the clearance plane toward a touch: not the way back to the start after a probe.
+  bool descends(std::size_t i, const RecordedCommand& c) const {
+    return c.kind == RecordedCommand::Kind::move && c.move.target.z() < 59 &&
+           (i == 0 || recorder_->commands[i - 1].kind != RecordedCommand::Kind::probe);
+  }
   // Once the job is done, every touch of the plan is in the journal exactly once.
   void expect_every_touch_once() {
     std::multiset<int> planned;
@@ -263,9 +269,8 @@ TEST_F(JobRunnerTest, CancelledMidTouchLeavesAlongTheSearchLine) {
   // The cancel comes as touch 8's descent is sent: the touch ends before its probe, and the ball
   // leaves the way it came in.
   int descents = 0;
-  recorder_->before = [&](std::size_t, const RecordedCommand& c) {
-    if (c.kind == RecordedCommand::Kind::move && journal().size() == 7 && c.move.target.z() < 59 && ++descents == 1)
-      control_.cancel = true;
+  recorder_->before = [&](std::size_t i, const RecordedCommand& c) {
+    if (descends(i, c) && journal().size() == 7 && ++descents == 1) control_.cancel = true;
   };
   EXPECT_EQ(run(), JobState::cancelled);
   EXPECT_EQ(journal().size(), 7u);
@@ -291,17 +296,54 @@ TEST_F(JobRunnerTest, PausedByTheOperatorResumesWithEveryTouchOnce) {
 
 TEST_F(JobRunnerTest, PausedByAStopResumesWithEveryTouchOnce) {
   start();
-  recorder_->before = [&](std::size_t, const RecordedCommand& c) {
-    if (c.kind == RecordedCommand::Kind::probe && journal().size() == 9 && !control_.operator_stop)
-      control_.operator_stop = true;  // machine.stop as this probe goes out: the job holds after it
+  int descents = 0;
+  recorder_->before = [&](std::size_t i, const RecordedCommand& c) {
+    if (descends(i, c) && journal().size() == 9 && ++descents == 1)
+      control_.operator_stop = true;  // machine.stop as touch 10 descends: the job holds before its probe
   };
   EXPECT_EQ(run(), JobState::paused);
   EXPECT_EQ(reason_, "operator stop");
+  EXPECT_EQ(journal().size(), 9u);
   ASSERT_TRUE(link_->touch_in_progress()) << "stopped inside a touch: its line waits for the next mover";
   recorder_->before = nullptr;
   EXPECT_EQ(run(), JobState::done) << reason_;
   expect_every_touch_once();
   EXPECT_FALSE(link_->touch_in_progress());
+}
+
+// Once the probe has touched, its result is journalled before the way back to the start: a stop
+// flag then waits for the next touch, and a machine that stops on that way (here: the move back
+// ends in Aborted) loses nothing: the resume leaves along the search line and does not touch again.
+TEST_F(JobRunnerTest, AStopAfterTheProbeKeepsItsTouch) {
+  start();
+  const auto probes = [this] {
+    return std::count_if(recorder_->commands.begin(), recorder_->commands.end(),
+                         [](const RecordedCommand& c) { return c.kind == RecordedCommand::Kind::probe; });
+  };
+  recorder_->before = [&](std::size_t, const RecordedCommand& c) {
+    if (c.kind == RecordedCommand::Kind::probe && journal().size() == 9) control_.operator_stop = true;
+  };
+  EXPECT_EQ(run(), JobState::paused);
+  EXPECT_EQ(reason_, "operator stop");
+  EXPECT_EQ(journal().size(), 10u) << "the touch the stop came during is kept";
+  EXPECT_FALSE(link_->touch_in_progress()) << "its way back was made";
+
+  bool stopped = false;
+  recorder_->before = [&](std::size_t i, const RecordedCommand& c) {
+    if (!stopped && i > 0 && recorder_->commands[i - 1].kind == RecordedCommand::Kind::probe &&
+        c.kind == RecordedCommand::Kind::move && journal().size() == 15) {
+      stopped = true;
+      throw hal::Aborted("move: stopped by stop()");
+    }
+  };
+  EXPECT_EQ(run(), JobState::paused);
+  ASSERT_TRUE(fault_);
+  EXPECT_EQ(journal().size(), 15u) << "the touch whose way back was cut is kept";
+  EXPECT_TRUE(link_->touch_in_progress());
+  recorder_->before = nullptr;
+  EXPECT_EQ(run(), JobState::done) << reason_;
+  expect_every_touch_once();
+  EXPECT_EQ(static_cast<std::size_t>(probes()), planned_touches()) << "a kept touch was made again";
 }
 
 TEST_F(JobRunnerTest, PausedByAMachineFaultResumesWithEveryTouchOnce) {

@@ -25,10 +25,24 @@ TEST(GrblSettings, ReadsTheMachineGrblDoesNotKnow) {
   ASSERT_EQ(s.machine.tips.size(), 2u);
   EXPECT_EQ(s.machine.active_tip, "T2");
   EXPECT_DOUBLE_EQ(s.machine.reference_sphere.radius_mm, 12.5);
-  // Without one, the built-in config/machine.json; a file name resolves against the base folder.
-  EXPECT_EQ(grbl_settings_from_json({{"device", "/dev/ttyACM0"}}).machine.active_tip, "T1");
+  // A file name resolves against the base folder.
   EXPECT_EQ(grbl_settings_from_json({{"device", "x"}, {"machine", "config/machine.json"}}, CMMD_SOURCE_DIR).machine.tips.size(),
             2u);
+}
+
+// Grbl knows no travel box: a block without the machine's description (or naming none) is refused
+// rather than run inside the sample machine's box.
+TEST(GrblSettings, RequiresTheMachineDescription) {
+  for (const nlohmann::json& block : {nlohmann::json{{"device", "/dev/ttyACM0"}},
+                                      nlohmann::json{{"device", "/dev/ttyACM0"}, {"machine", ""}}}) {
+    try {
+      grbl_settings_from_json(block);
+      FAIL() << "no FieldError for " << block.dump();
+    } catch (const description::FieldError& e) {
+      EXPECT_EQ(e.pointer(), "/machine") << block.dump();
+      EXPECT_EQ(e.problems().size(), 1u) << block.dump();
+    }
+  }
 }
 
 TEST(GrblSettings, NamesEveryBadKey) {

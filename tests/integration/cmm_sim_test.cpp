@@ -23,8 +23,8 @@ TEST(CmmSim, ServesGrblOnItsOwnPtyAndExitsCleanlyOnSigterm) {
   ASSERT_TRUE(std::filesystem::exists(pty)) << pty;
 
   {
-    hal::GrblCmm cmm;
-    cmm.configure({{"driver", "grbl"}, {"device", pty}, {"reset_on_open", false}});  // the default machine
+    hal::GrblCmm cmm(CMMD_SOURCE_DIR);
+    cmm.configure({{"driver", "grbl"}, {"device", pty}, {"reset_on_open", false}, {"machine", "config/machine.json"}});
     cmm.connect();
     cmm.enable();
     EXPECT_FALSE(cmm.status().homed);

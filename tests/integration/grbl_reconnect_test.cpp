@@ -34,9 +34,10 @@ TEST(GrblReconnect, ALineLeftRunningByAFrozenMachineIsStoppedAndItsOkNotTakenFor
   testing::ChildProcess sim({CMMD_BINARY_DIR "/sim/cmm-sim", "--port", "0", "--time-scale", "2", "--grbl-device", sim_end});
   ASSERT_TRUE(nlohmann::json::parse(sim.read_line(60)).value("ready", false));
 
-  hal::GrblCmm cmm;
+  hal::GrblCmm cmm(CMMD_SOURCE_DIR);
   cmm.configure({{"driver", "grbl"}, {"device", driver_end}, {"reset_on_open", false}, {"status_timeout_s", 0.3},
-                 {"response_timeout_s", 0.5}, {"poll_interval_s", 0.005}});  // the default machine, as cmm-sim's
+                 {"response_timeout_s", 0.5}, {"poll_interval_s", 0.005},
+                 {"machine", "config/machine.json"}});  // cmm-sim's machine
   cmm.connect();
   cmm.enable();
   cmm.home();

@@ -62,18 +62,18 @@ TEST(JsonFields, ReportsEveryProblemWithItsPointer) {
     b.throw_if_problems("cmmd.json");
     FAIL() << "no FieldError";
   } catch (const FieldError& e) {
+    // Unknown keys first (a misspelling is often why a key is missing), the rest as read.
     EXPECT_THAT(lines(e),
-                ElementsAre(HasSubstr("/port: must be an integer in [0, 65535], not 70000"),
+                ElementsAre(HasSubstr("/link/extra: unknown key (known: retries)"), HasSubstr("/typo_key: unknown key"),
+                            HasSubstr("/port: must be an integer in [0, 65535], not 70000"),
                             HasSubstr("/host: must be a string, not 5"), HasSubstr("/rtu: must be true or false"),
                             HasSubstr("/timeout_s: must be in [0, 60], not -1"), HasSubstr("/gap: must be positive, not 0"),
                             HasSubstr("/home: must be [x, y, z], not [1,2]"),
                             HasSubstr("/mode: must be one of rtu, tcp, not \"fast\""),
                             HasSubstr("/items/1: must be an object, not 7"), HasSubstr("/link/retries: must be an integer"),
-                            HasSubstr("/link/extra: unknown key (known: retries)"),
-                            HasSubstr("/a~1b/x: must be a number"), HasSubstr("/missing_key: missing (what it holds)"),
-                            HasSubstr("/typo_key: unknown key")));
+                            HasSubstr("/a~1b/x: must be a number"), HasSubstr("/missing_key: missing (what it holds)")));
     EXPECT_THAT(e.what(), HasSubstr("cmmd.json: 13 problems"));
-    EXPECT_EQ(e.pointer(), "/port");
+    EXPECT_EQ(e.pointer(), "/link/extra");
   }
 }
 
@@ -104,6 +104,22 @@ TEST(JsonFields, ANonObjectInputIsOneProblem) {
   JsonFields b(json::parse("[1, 2]"), "/machine");
   EXPECT_FALSE(b.expect_object());
   EXPECT_THROW(b.throw_if_problems("x"), FieldError);
+}
+
+// An object given as something else is one problem, not one more for each key it should hold.
+TEST(JsonFields, AMemberThatIsNotAnObjectIsOneProblem) {
+  JsonFields b(json{{"travel_box", 5}});
+  JsonFields box = b.object("travel_box");
+  EXPECT_FALSE(box.require("min"));
+  EXPECT_FALSE(box.require("max"));
+  JsonFields missing = b.object("reference_sphere");
+  EXPECT_FALSE(missing.require("radius_mm"));  // a missing object's keys are missing, though
+  try {
+    b.throw_if_problems("machine.json");
+    FAIL();
+  } catch (const FieldError& e) {
+    EXPECT_THAT(lines(e), ElementsAre("/travel_box: must be an object, not 5", "/reference_sphere/radius_mm: missing"));
+  }
 }
 
 TEST(JsonFields, FilesThatAreNotJsonNameTheByte) {
