@@ -44,12 +44,12 @@ GrblSettings grbl_settings_from_json(const nlohmann::json& j, const std::string&
   s.connect_backoff_s = b.number("connect_backoff_s", s.connect_backoff_s, 0, 60);
   // Grbl knows nothing of the travel box or the tips, and a sample's box enforced on a real machine
   // is worse than none: the description is required.
-  if (!b.require("machine", "the machine description: machine.json's schema, inline or a file name")) {
-  } else if (b.member("machine").value() == "") {
-    b.problem("machine", "must name a file or hold the description");
-  } else {
-    s.machine = description::described(b, "machine", s.machine, base_dir, description::machine_from_json,
-                                       description::read_machine);
+  if (b.require("machine", "the machine description: machine.json's schema, inline or a file name")) {
+    if (b.member("machine").value() == "")
+      b.problem("machine", "must name a file or hold the description");
+    else
+      s.machine = description::described(b, "machine", s.machine, base_dir, description::machine_from_json,
+                                         description::read_machine);
   }
   b.finish();
   b.throw_if_problems("grbl driver config");
