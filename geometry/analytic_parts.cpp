@@ -50,8 +50,21 @@ TrueEdge circular_edge(const Vec3& centre, double radius, SideNormals side_norma
   return edge;
 }
 
-AnalyticPart box_part(std::string name, const Vec3& size, const std::vector<VerticalHole>& holes, double h) {
-  AnalyticPart part{std::move(name), mesh_box_with_holes(size, holes, h), {}, {}, size.norm()};
+int segments_for(double radius, const Tessellation& t) {
+  const int cad = circle_segments(radius, t.chord_tolerance);
+  if (t.style == Tessellation::Style::slivers) return std::max(cad, radius > 20 ? 720 : 180);
+  return cad;
+}
+
+TriangleMesh box_mesh(const Vec3& size, const std::vector<VerticalHole>& holes, const Tessellation& t) {
+  if (t.style == Tessellation::Style::uniform) return mesh_box_with_holes(size, holes, t.edge_length);
+  std::vector<int> segments;
+  for (const VerticalHole& hole : holes) segments.push_back(segments_for(hole.radius, t));
+  return mesh_box_with_holes_cad(size, holes, segments, t.style == Tessellation::Style::slivers ? 0.5 : 0.0);
+}
+
+AnalyticPart box_part(std::string name, const Vec3& size, const std::vector<VerticalHole>& holes, const Tessellation& t) {
+  AnalyticPart part{std::move(name), box_mesh(size, holes, t), {}, {}, size.norm()};
   for (int axis = 0; axis < 3; ++axis) {
     const int b = (axis + 1) % 3, c = (axis + 2) % 3;
     for (int high_b : {0, 1})
@@ -94,35 +107,56 @@ Vec3 cone_normal(const Vec3& u, double r, double rise) {
   return (std::abs(rise) * u + std::copysign(r, rise) * Vec3::UnitZ()).normalized();
 }
 
+// The profile of a surface of revolution: its straight pieces cut into edge_length steps for a uniform
+// mesh, left whole for a CAD one (a cone is then an apex fanned to its rim).
+void append_piece(std::vector<Point2>& profile, const Point2& from, const Point2& to, const Tessellation& t) {
+  if (t.style == Tessellation::Style::uniform) append_segment(profile, from, to, t.edge_length);
+  else profile.push_back(to);
+}
+
+TriangleMesh revolved_mesh(const std::vector<Point2>& profile, double rim_radius, const Tessellation& t) {
+  if (t.style == Tessellation::Style::uniform) return mesh_revolved_profile(profile, t.edge_length);
+  return mesh_revolved_profile_cad(profile, segments_for(rim_radius, t));
+}
+
 }  // namespace
 
-// The cube is [0, side]³: a corner at the origin, standing on z = 0.
-AnalyticPart make_cube(double side_mm, double edge_length) {
-  return box_part("cube", Vec3::Constant(side_mm), {}, edge_length);
+int circle_segments(double radius, double chord_tolerance) {
+  if (!(chord_tolerance > 0) || chord_tolerance >= radius) return 3;
+  return std::max(3, static_cast<int>(std::ceil(std::numbers::pi / std::acos(1 - chord_tolerance / radius))));
 }
+
+// The cube is [0, side]³: a corner at the origin, standing on z = 0.
+AnalyticPart make_cube(double side_mm, double edge_length) { return make_cube(side_mm, Tessellation{.edge_length = edge_length}); }
+AnalyticPart make_cube(double side_mm, const Tessellation& t) { return box_part("cube", Vec3::Constant(side_mm), {}, t); }
 
 // Ø42 at (44, 47.5), Ø10 at (13, 12.5), (75, 12.5), (13, 82.5) and (75, 82.5): the small holes in
 // the corners, 7.5 mm of wall to the 88 mm sides, 8 mm to the 95 mm sides, 20.8 mm to the big hole.
 // Meshes for edge_length up to about 4.5 mm.
-AnalyticPart make_case3_block(double edge_length) {
+AnalyticPart make_case3_block(double edge_length) { return make_case3_block(Tessellation{.edge_length = edge_length}); }
+AnalyticPart make_case3_block(const Tessellation& t) {
   return box_part("case3_block", Vec3(88, 95, 41),
-                  {{44, 47.5, 21}, {13, 12.5, 5}, {75, 12.5, 5}, {13, 82.5, 5}, {75, 82.5, 5}}, edge_length);
+                  {{44, 47.5, 21}, {13, 12.5, 5}, {75, 12.5, 5}, {13, 82.5, 5}, {75, 82.5, 5}}, t);
 }
 
 // Ø20 at (30, 40), Ø12 at (70, 25) and (70, 55), Ø6 at (100, 20), Ø8 at (100, 60): rims at least
 // 18 mm apart and 16 mm from the sides. Meshes for edge_length up to about 4.5 mm.
-AnalyticPart make_plate_with_holes(double edge_length) {
+AnalyticPart make_plate_with_holes(double edge_length) { return make_plate_with_holes(Tessellation{.edge_length = edge_length}); }
+AnalyticPart make_plate_with_holes(const Tessellation& t) {
   return box_part("plate_with_holes", Vec3(120, 80, 10),
-                  {{30, 40, 10}, {70, 25, 6}, {70, 55, 6}, {100, 20, 3}, {100, 60, 4}}, edge_length);
+                  {{30, 40, 10}, {70, 25, 6}, {70, 55, 6}, {100, 20, 3}, {100, 60, 4}}, t);
 }
 
 // Apexes at the origin and at (0, 0, 2H), rim at z = H; each apex is one vertex fanned to its ring.
 AnalyticPart make_bicone(double radius_mm, double height_mm, double edge_length) {
+  return make_bicone(radius_mm, height_mm, Tessellation{.edge_length = edge_length});
+}
+AnalyticPart make_bicone(double radius_mm, double height_mm, const Tessellation& t) {
   const double r = radius_mm, h = height_mm;
   std::vector<Point2> profile{{0, 0}};
-  append_segment(profile, {0, 0}, {r, h}, edge_length);
-  append_segment(profile, {r, h}, {0, 2 * h}, edge_length);
-  AnalyticPart part{"bicone", mesh_revolved_profile(profile, edge_length), {}, {}, 2 * std::sqrt(2 * r * r + h * h)};
+  append_piece(profile, {0, 0}, {r, h}, t);
+  append_piece(profile, {r, h}, {0, 2 * h}, t);
+  AnalyticPart part{"bicone", revolved_mesh(profile, r, t), {}, {}, 2 * std::sqrt(2 * r * r + h * h)};
   part.sharp_edges.push_back(circular_edge(Vec3(0, 0, h), r, [&](const Vec3& u) {
     return std::pair{cone_normal(u, r, h), cone_normal(u, r, -h)};
   }));
@@ -131,17 +165,22 @@ AnalyticPart make_bicone(double radius_mm, double height_mm, double edge_length)
 
 // Hemisphere centred at (0, 0, R): pole at the origin, rim at z = R; apex at (0, 0, R + H).
 AnalyticPart make_hemisphere_cone(double radius_mm, double height_mm, double edge_length) {
+  return make_hemisphere_cone(radius_mm, height_mm, Tessellation{.edge_length = edge_length});
+}
+AnalyticPart make_hemisphere_cone(double radius_mm, double height_mm, const Tessellation& t) {
   const double r = radius_mm, h = height_mm;
-  const int arc_steps = std::max(1, static_cast<int>(std::lround(std::numbers::pi / 2 * r / edge_length)));
+  // A CAD system steps the meridian by the same chord tolerance as the rings.
+  const int arc_steps = t.style == Tessellation::Style::uniform
+                            ? std::max(1, static_cast<int>(std::lround(std::numbers::pi / 2 * r / t.edge_length)))
+                            : std::max(1, (circle_segments(r, t.chord_tolerance) + 3) / 4);
   std::vector<Point2> profile;
   for (int i = 0; i < arc_steps; ++i) {
     const double polar = std::numbers::pi / 2 * i / arc_steps;
     profile.emplace_back(r * std::sin(polar), r - r * std::cos(polar));
   }
   profile.emplace_back(r, r);
-  append_segment(profile, {r, r}, {0, r + h}, edge_length);
-  AnalyticPart part{
-      "hemisphere_cone", mesh_revolved_profile(profile, edge_length), {}, {}, std::sqrt(8 * r * r + (r + h) * (r + h))};
+  append_piece(profile, {r, r}, {0, r + h}, t);
+  AnalyticPart part{"hemisphere_cone", revolved_mesh(profile, r, t), {}, {}, std::sqrt(8 * r * r + (r + h) * (r + h))};
   part.sharp_edges.push_back(circular_edge(Vec3(0, 0, r), r, [&](const Vec3& u) {
     return std::pair{cone_normal(u, r, h), u};
   }));
@@ -163,11 +202,15 @@ const std::vector<std::string>& analytic_part_names() {
 }
 
 AnalyticPart make_analytic_part(const std::string& name, double edge_length) {
-  if (name == "cube") return make_cube(40, edge_length);
-  if (name == "case3_block") return make_case3_block(edge_length);
-  if (name == "plate_with_holes") return make_plate_with_holes(edge_length);
-  if (name == "bicone") return make_bicone(25, 37.5, edge_length);
-  if (name == "hemisphere_cone") return make_hemisphere_cone(25, 25, edge_length);
+  return make_analytic_part(name, Tessellation{.edge_length = edge_length});
+}
+
+AnalyticPart make_analytic_part(const std::string& name, const Tessellation& t) {
+  if (name == "cube") return make_cube(40, t);
+  if (name == "case3_block") return make_case3_block(t);
+  if (name == "plate_with_holes") return make_plate_with_holes(t);
+  if (name == "bicone") return make_bicone(25, 37.5, t);
+  if (name == "hemisphere_cone") return make_hemisphere_cone(25, 25, t);
   std::string known;
   for (const auto& n : analytic_part_names()) known += (known.empty() ? "" : ", ") + n;
   throw std::invalid_argument("unknown analytic part \"" + name + "\" (known: " + known + ")");

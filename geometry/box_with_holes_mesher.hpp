@@ -22,4 +22,11 @@ struct VerticalHole {
 // coarse for the hole layout.
 TriangleMesh mesh_box_with_holes(const Vec3& size, const std::vector<VerticalHole>& holes, double edge_length);
 
+// The same solid as a CAD system exports it (box_with_holes_cad.cpp): each plane face ear-clipped from its
+// outline and hole circles alone, each bore wall a strip of 2 × segments long triangles. A hole's circle
+// has `segments` points; boundary_spacing > 0 also cuts the box's straight edges into pieces of about
+// that length, which the ear clipping turns into fans of slivers.
+TriangleMesh mesh_box_with_holes_cad(const Vec3& size, const std::vector<VerticalHole>& holes,
+                                     const std::vector<int>& segments, double boundary_spacing = 0);
+
 }  // namespace cmm::geometry

@@ -13,4 +13,8 @@ namespace cmm::geometry {
 // 2πr / edge_length vertices (at least 3), each pole one vertex; the result is outward-oriented and watertight.
 TriangleMesh mesh_revolved_profile(const std::vector<Eigen::Vector2d>& profile, double edge_length);
 
+// As a CAD system exports it: every ring has the same number of segments, aligned, so a pole or apex is
+// a fan of long triangles to its ring and neighbouring rings are joined by strips of quads.
+TriangleMesh mesh_revolved_profile_cad(const std::vector<Eigen::Vector2d>& profile, int segments);
+
 }  // namespace cmm::geometry

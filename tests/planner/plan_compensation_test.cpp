@@ -76,13 +76,15 @@ const Scenario& scenario(const std::string& name) {
   static std::map<std::string, std::unique_ptr<Scenario>> cache;
   auto& slot = cache[name];
   if (!slot) {
-    if (name == "case3_block") slot = make_scenario(name, geometry::make_case3_block, 0);
-    if (name == "case3_block_noisy") slot = make_scenario(name, geometry::make_case3_block, 0.1);
+    const auto case3 = [](double h) { return geometry::make_case3_block(h); };
+    const auto plate = [](double h) { return geometry::make_plate_with_holes(h); };
+    if (name == "case3_block") slot = make_scenario(name, case3, 0);
+    if (name == "case3_block_noisy") slot = make_scenario(name, case3, 0.1);
     // Windows of at least 80° half-angle: none is wide enough, and every edge is measured on its faces.
     if (name == "case3_block_faces")
-      slot = make_scenario(name, geometry::make_case3_block, 0, [](WindowOptions& w) { w.min_half_angle_deg = 80; });
-    if (name == "plate_with_holes") slot = make_scenario(name, geometry::make_plate_with_holes, 0);
-    if (name == "plate_with_holes_noisy") slot = make_scenario(name, geometry::make_plate_with_holes, 0.1);
+      slot = make_scenario(name, case3, 0, [](WindowOptions& w) { w.min_half_angle_deg = 80; });
+    if (name == "plate_with_holes") slot = make_scenario(name, plate, 0);
+    if (name == "plate_with_holes_noisy") slot = make_scenario(name, plate, 0.1);
   }
   return *slot;
 }

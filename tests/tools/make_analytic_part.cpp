@@ -13,16 +13,25 @@ int main(int argc, char** argv) {
   double edge_length = 2, sigma = 0;
   std::uint64_t seed = 1;
   bool open_bores = false;
+  std::string style = "uniform";
+  Tessellation tessellation;
   app.add_option("PART", name, "cube, case3_block, plate_with_holes, bicone or hemisphere_cone")->required();
   app.add_option("-o,--output", output, "file to write; the format follows the extension")->required();
   app.add_option("--edge-length", edge_length, "target mesh edge length, mm")->check(CLI::PositiveNumber);
+  app.add_option("--tessellation", style, "uniform, cad or slivers")->check(CLI::IsMember({"uniform", "cad", "slivers"}));
+  app.add_option("--chord-tolerance", tessellation.chord_tolerance, "cad and slivers: largest facet distance from a curved face, mm")
+      ->check(CLI::PositiveNumber);
   app.add_option("--noise", sigma, "Gaussian noise sigma on every coordinate, mm")->check(CLI::NonNegativeNumber);
   app.add_option("--seed", seed, "noise seed");
   app.add_flag("--open-bores", open_bores, "drop the bore walls, as a scan from above loses them");
   CLI11_PARSE(app, argc, argv);
   AnalyticPart part;
   try {
-    part = make_analytic_part(name, edge_length);
+    tessellation.edge_length = edge_length;
+    tessellation.style = style == "cad"       ? Tessellation::Style::cad
+                         : style == "slivers" ? Tessellation::Style::slivers
+                                              : Tessellation::Style::uniform;
+    part = make_analytic_part(name, tessellation);
   } catch (const std::invalid_argument& e) {
     std::cerr << "make-analytic-part: " << e.what() << "\n";
     return 2;
