@@ -15,8 +15,7 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const Job
   options.cancel = cancel;
   try {
     ReferenceModel m = planner::load_reference_model(file, travel_box, options);
-    m.inputs.delta = request.delta_mm;
-    m.inputs.delta_source = "job request (or cmmd.json's job.delta_mm)";
+    planner::settle_delta(m.inputs, request.delta_mm, "job request (or cmmd.json's job.delta_mm)", m.features);
     return m;
   } catch (const planner::ModelError& e) {
     nlohmann::json data = {{"file", e.file.string()}, {"kind", planner::to_string(e.kind)}};
@@ -47,11 +46,11 @@ description::MachineDescription machine_for_job(const description::MachineDescri
 }
 
 planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
-                                  const description::MachineDescription& machine, const JobRequest& request,
+                                  const description::MachineDescription& machine,
                                   const geometry::CancelCheck& cancel) {
   planner::MeasurementPlanOptions options;
   options.touch.radius = machine.tip().ball_radius_mm;
-  options.touch.delta = request.delta_mm;
+  options.touch.delta = model.inputs.delta;
   options.cancel = cancel;
   try {
     return planner::plan_measurement(model.features, model.mesh, T_M_S, machine, options);

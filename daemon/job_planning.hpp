@@ -33,9 +33,10 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const Job
 description::MachineDescription machine_for_job(const description::MachineDescription& configured,
                                                 const description::MachineDescription& reported);
 
-// Throws RpcError planning_error when the plan cannot be made; geometry::Cancelled when `cancel` asks.
+// For the δ the model was loaded with (its inputs), with the active tip's radius. Throws RpcError
+// planning_error when the plan cannot be made; geometry::Cancelled when `cancel` asks.
 planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
-                                  const description::MachineDescription& machine, const JobRequest& request,
+                                  const description::MachineDescription& machine,
                                   const geometry::CancelCheck& cancel = {});
 
 }  // namespace cmm::daemon

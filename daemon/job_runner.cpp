@@ -293,7 +293,7 @@ description::MachineDescription JobRunner::machine_for_plan(const description::M
 planner::MeasurementPlan JobRunner::plan(const ReferenceModel& model, const JobRegistration& registration,
                                          const description::MachineDescription& machine) {
   const geometry::CancelCheck cancel{[this] { return control_.cancel || control_.shutdown; }};
-  planner::MeasurementPlan plan = plan_job(model, registration.T_M_S, machine, request_, cancel);
+  planner::MeasurementPlan plan = plan_job(model, registration.T_M_S, machine, cancel);
   if (!env_.store.read(id_, JobFile::plan))
     env_.store.write(id_, JobFile::plan,
                      planner::plan_json(model.features, model.inputs, &plan, &machine, registration.fit).dump(1) + "\n");

@@ -81,7 +81,7 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
   const description::MachineDescription machine =
       info ? machine_for_job(config.description, *info) : config.description;
   if (!info) notes.push_back("the machine could not be read: planned for the configured tip radii");
-  const planner::MeasurementPlan plan = plan_job(model, T_M_S, machine, request, cancel);
+  const planner::MeasurementPlan plan = plan_job(model, T_M_S, machine, cancel);
 
   const std::unique_ptr<hal::Cmm> simulator = make_simulator(".");
   hal::Cmm& cmm = *simulator;

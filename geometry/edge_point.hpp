@@ -28,6 +28,9 @@ struct EdgePoint {
   // Standard error of each normal's turn about the edge: the one component that moves a window.
   double n_up_uncertainty_rad = 0, n_down_uncertainty_rad = 0;
   double n_up_spread_rad = 0, n_down_spread_rad = 0;
+  // How far the mesh's crease may lie from the true edge here on its own (a coarse fan's chord is
+  // inside the circle): added to the plan's δ for this point.
+  double mesh_deviation_mm = 0;
   bool probeable = true;
   std::string reason;  // why not probeable
   int curve = -1;      // feature curve or boundary loop it was sampled on

@@ -157,7 +157,7 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
                            const FeatureOptions& options) {
   FeatureEdges result;
   const int edge_count = adjacency.edge_count();
-  // Cosines rather than angles: the threshold and the median compare the same either way, and the
+  // Cosines rather than angles: the threshold compares the same either way, and the
   // 4M-triangle benchmark has no time for an atan2 per edge.
   std::vector<double> cos_dihedral(edge_count, 1);
   auto cosines = [&](const Points& normals) {
@@ -166,23 +166,18 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
         cos_dihedral[e] = normals.row(adjacency.half_edge(e, 0) / 3).dot(normals.row(adjacency.half_edge(e, 1) / 3));
   };
   cosines(faces.normals);
-  // The noise estimate is statistical: every 8th edge of a big mesh is plenty, and cheaper.
+  // Every 8th edge of a big mesh is plenty for a mean, and cheaper. The mean edge length turns the vertex
+  // noise into the tilt it gives facets, and sizes the spurs pruned as noise.
   const int stride = edge_count > 80'000 ? 8 : 1;
-  std::vector<double> interior;
-  interior.reserve(edge_count / stride + 1);
   double length_sum = 0;
   int sampled = 0;
-  for (int e = 0; e < edge_count; e += stride, ++sampled) {
+  for (int e = 0; e < edge_count; e += stride, ++sampled)
     length_sum += (mesh.vertices.row(adjacency.edges(e, 0)) - mesh.vertices.row(adjacency.edges(e, 1))).norm();
-    if (adjacency.use_count(e) == 2) interior.push_back(cos_dihedral[e]);
-  }
   result.mean_edge_length = sampled ? length_sum / sampled : 0;
-  if (!interior.empty()) {
-    auto middle = interior.begin() + interior.size() / 2;
-    std::nth_element(interior.begin(), middle, interior.end());
-    result.median_dihedral_deg = std::acos(std::clamp(*middle, -1.0, 1.0)) * 180 / std::numbers::pi;
-  }
-  result.noisy = result.median_dihedral_deg > options.noisy_median_deg;
+  const double threshold = options.angle_deg * std::numbers::pi / 180;
+  result.noise = surface_noise(mesh, adjacency, faces, threshold);
+  result.noisy = result.mean_edge_length > 0 &&
+                 2 * result.noise.sigma_mm / result.mean_edge_length > options.noisy_facet_tilt_deg * std::numbers::pi / 180;
 
   const Points* normals = &faces.normals;
   if (result.noisy) {
@@ -192,7 +187,6 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
     normals = &result.filtered_normals;
     cosines(result.filtered_normals);
   }
-  const double threshold = options.angle_deg * std::numbers::pi / 180;
   const double cos_threshold = std::cos(threshold);
   result.is_feature.assign(edge_count, 0);
   for (int e = 0; e < edge_count; ++e)

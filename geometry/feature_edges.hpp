@@ -1,5 +1,5 @@
 // Sharp feature edges: mesh edges whose dihedral angle exceeds a threshold, chained into curves
-// and flagged convex or concave. Noisy meshes are detected and their normals filtered first.
+// and flagged convex or concave. The vertex noise is measured first, and a noisy mesh's normals filtered.
 #pragma once
 
 #include <vector>
@@ -7,6 +7,7 @@
 #include "geometry/cancellation.hpp"
 #include "geometry/edge_adjacency.hpp"
 #include "geometry/face_geometry.hpp"
+#include "geometry/surface_noise.hpp"
 
 namespace cmm::geometry {
 
@@ -16,9 +17,12 @@ struct FeatureOptions {
   // direction (hysteresis, as in Canny's edge detector): noise dips a crease below the threshold
   // here and there, and a gap would cut one edge into pieces whose sides leak into each other.
   double continuation_fraction = 0.5;
-  // A mesh whose median dihedral angle exceeds this is treated as noisy: its normals are filtered
-  // before the threshold.
-  double noisy_median_deg = 4;
+  // A mesh is treated as noisy (its normals filtered before the threshold, its creases smoothed, its
+  // sides fitted over a neighbourhood) when its vertex noise, measured on the surface in mm
+  // (surface_noise), tilts facets of its mean edge length by more than this: 2σ/L radians. 0.1 mm on
+  // 1 mm edges tilts them by 11°, 10 µm on 0.2 mm edges by 6°; a decimated mesh's 7 µm on 3 mm edges
+  // by 0.3°, and an exact mesh's less than 1 µm not at all, however coarse or thin its triangles.
+  double noisy_facet_tilt_deg = 1.0;
   // Curves that end in nothing (or close on themselves) and are shorter than this many mean edge
   // lengths are dropped: on a
   // clean mesh they are the spokes of a coarsely tessellated cone apex, on a noisy one specks and
@@ -46,9 +50,9 @@ struct FeatureCurve {
 struct FeatureEdges {
   std::vector<char> is_feature;  // per edge
   std::vector<FeatureCurve> curves;
-  double median_dihedral_deg = 0;
+  SurfaceNoise noise;
   double mean_edge_length = 0;
-  bool noisy = false;
+  bool noisy = false;  // FeatureOptions::noisy_facet_tilt_deg
   Points filtered_normals;  // F × 3 bilateral-filtered face normals when noisy, else empty
 };
 

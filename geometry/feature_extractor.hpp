@@ -21,6 +21,7 @@ struct CurveSample {
   PolylineSample at;
   SideNormal left, right;
   int left_face = -1, right_face = -1;
+  ChordDeviation chord;  // of the crease segment the sample lies on
 };
 
 // A closed feature curve found to be the rim of a bore.
@@ -55,8 +56,13 @@ class Extractor {
   void check_point_count() const;
   int smoothing_window(std::size_t vertices, bool closed) const;
   bool two_distinct_sides(const std::vector<CurveSample>& samples) const;
-  SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn);
-  Vec3 edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s) const;
+  SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn, double along);
+  double along_edge(const std::vector<Vec3>& points, const PolylineSample& s) const;
+  // The vertex noise a clean mesh's side normals carry over `region` (its facets' residuals are the
+  // tessellation's); none on a noisy mesh, whose residuals are the noise.
+  std::optional<double> clean_sigma(const std::vector<int>& region) const;
+  double across_edge(int seed, const PolylineSample& s) const;
+  Vec3 edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double along) const;
   void emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole);
   void emit_loop_points(SideRegionFinder& finder, int loop_index);
   double distinct_sides_rad() const { return 0.5 * options_.features.angle_deg * std::numbers::pi / 180; }
@@ -73,7 +79,7 @@ class Extractor {
   EdgeAdjacency adjacency_;
   FaceGeometry faces_;
   FeatureModel model_;
-  double radius_ = 0, along_ = 0;
+  double noise_radius_ = 0, noise_along_ = 0;  // the neighbourhood the vertex noise asks for, mm
   int half_window_ = 0;
 };
 

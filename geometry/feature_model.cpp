@@ -32,10 +32,14 @@ Extractor::Extractor(const TriangleMesh& mesh, const FeatureModelOptions& option
   model_.features = feature_edges(mesh, adjacency_, faces_, features);
   options.cancel.throw_if_requested("feature edge detection");
   model_.loops = boundary_loops(mesh, adjacency_);
-  radius_ = (model_.features.noisy ? options.noisy_neighbourhood_edges : options.neighbourhood_edges) *
-            model_.features.mean_edge_length;
-  along_ = options.neighbourhood_along_edges * model_.features.mean_edge_length;
+  const double sigma = model_.features.noise.sigma_mm;
+  noise_radius_ = options.neighbourhood_sigmas * sigma;
+  noise_along_ = options.neighbourhood_along_sigmas * sigma;
   half_window_ = model_.features.noisy ? 3 : 0;
+  // The centre weight of a quadratic Savitzky–Golay fit over 2m + 1 points is 3(3m² + 3m − 1) / ((2m + 1)(4m² + 4m − 3)).
+  const double m = half_window_;
+  const double leverage = m == 0 ? 1.0 : 3 * (3 * m * m + 3 * m - 1) / ((2 * m + 1) * (4 * m * m + 4 * m - 3));
+  model_.point_sigma_mm = sigma * std::sqrt(leverage);
 }
 
 // The points sample_polyline will make, counted from the curves' lengths before any is made: the
@@ -90,7 +94,7 @@ FeatureModel Extractor::run() {
 std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points) {
   std::vector<CurveSample> result;
   for (const PolylineSample& s : sample_polyline(points, curve.closed, options_.spacing)) {
-    CurveSample sample{s, {}, {}, -1, -1};
+    CurveSample sample{s, {}, {}, -1, -1, {}};
     const int e = curve.edges[s.segment];
     const int from = curve.vertices[s.segment];
     for (int i = 0; i < adjacency_.use_count(e); ++i) {
@@ -98,9 +102,11 @@ std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const
       (mesh_.faces(h / 3, h % 3) == from ? sample.left_face : sample.right_face) = h / 3;
     }
     if (sample.left_face < 0 || sample.right_face < 0) continue;  // inconsistent orientation here
-    const Vec3 turn = edge_turn(points, curve.closed, s);
-    sample.left = side(finder, sample.left_face, s, turn);
-    sample.right = side(finder, sample.right_face, s, turn);
+    const double along = along_edge(points, s);
+    const Vec3 turn = edge_turn(points, curve.closed, s, along);
+    sample.left = side(finder, sample.left_face, s, turn, along);
+    sample.right = side(finder, sample.right_face, s, turn, along);
+    sample.chord = chord_deviation(points, curve.closed, s.segment);
     result.push_back(sample);
   }
   return result;
@@ -127,25 +133,78 @@ bool Extractor::two_distinct_sides(const std::vector<CurveSample>& samples) cons
 // The turn side_normal takes back out of a side's facets. Around a small rim the side region spans
 // a wide arc, where a few degrees' error in the estimated axis would turn the facets of a flat top
 // by more than the turn's own second-order effect: there the linear fit alone is better.
-Vec3 Extractor::edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s) const {
-  const Vec3 turn = polyline_turn(points, closed, s, 2 * along_);
-  return turn.norm() * along_ <= 0.5 ? turn : Vec3::Zero();
+Vec3 Extractor::edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double along) const {
+  const Vec3 turn = polyline_turn(points, closed, s, 2 * along);
+  return turn.norm() * along <= 0.5 ? turn : Vec3::Zero();
+}
+
+// How far along the edge a side's facets are taken, in mm: what the vertex noise asks for, but at
+// least the reference spacing and the crease segment the point lies on with half its neighbours'
+// reach, so the facets touching the edge here are always in.
+double Extractor::along_edge(const std::vector<Vec3>& points, const PolylineSample& s) const {
+  const auto i = static_cast<std::size_t>(s.segment);
+  const double segment = (points[(i + 1) % points.size()] - points[i]).norm();
+  return std::max({noise_along_, options_.spacing, 1.5 * segment});
+}
+
+// How far across the edge: what the noise asks for, but at least 2.5 spacings and 2.5 times the depth
+// of the facet touching the edge (its far corner's distance from the edge), so the row beyond it is in
+// and a curved side's field can be taken to the edge.
+double Extractor::across_edge(int seed, const PolylineSample& s) const {
+  double depth = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 offset = vertex(mesh_, mesh_.faces(seed, k)) - s.position;
+    depth = std::max(depth, (offset - offset.dot(s.direction) * s.direction).norm());
+  }
+  return std::max({noise_radius_, 2.5 * options_.spacing, 2.5 * depth});
 }
 
 // The side normal grown from a seed face; a seed that is a fold of noise (its region stays tiny)
 // hands over to the neighbour whose region is largest.
-SideNormal Extractor::side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn) {
-  std::vector<int> region = finder.region(seed, s.position, s.direction, radius_, along_);
-  if (region.size() < min_region_faces) {
+SideNormal Extractor::side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn, double along) {
+  const double radius = across_edge(seed, s);
+  std::vector<int> region = finder.region(seed, s.position, s.direction, radius, along);
+  if (model_.features.noisy && region.size() < min_region_faces) {
     for (int k = 0; k < 3; ++k) {
       const int e = adjacency_.face_edges(seed, k);
       const int neighbour = model_.features.is_feature[e] ? -1 : adjacency_.other_face(e, seed);
       if (neighbour < 0) continue;
-      const std::vector<int>& other = finder.region(neighbour, s.position, s.direction, radius_, along_);
+      const std::vector<int>& other = finder.region(neighbour, s.position, s.direction, radius, along);
       if (other.size() > region.size()) region = other;
     }
   }
-  return side_normal(mesh_, faces_, region, s.position, s.direction, turn);
+  if (model_.features.noisy) return side_normal(mesh_, faces_, region, s.position, s.direction, turn, std::nullopt);
+  // On a clean mesh the facets at the edge are best where they are exact; where they are not (a
+  // decimated patch), more of the side steadies the fit. The neighbourhood that states the smallest
+  // uncertainty is taken (Lepski's rule, which keeps a narrower fit that disagrees with a wider one,
+  // kept a decimated rim's worst facets: their own spread understates them).
+  SideNormal best = side_normal(mesh_, faces_, region, s.position, s.direction, turn, clean_sigma(region));
+  for (double widen : {2.0, 4.0}) {
+    if (best.uncertainty_rad < 1e-3) break;  // 0.06°: no wider region would do better where it matters
+    const std::vector<int>& wider = finder.region(seed, s.position, s.direction, widen * radius, widen * along);
+    if (wider.size() <= region.size()) break;  // the side ends here
+    SideNormal candidate = side_normal(mesh_, faces_, wider, s.position, s.direction, turn, clean_sigma(wider));
+    if (candidate.uncertainty_rad < best.uncertainty_rad) best = candidate;
+    region = wider;
+  }
+  return best;
+}
+
+// The mesh's vertex noise, or the RMS distance of this region's own vertices from their local fit
+// where that is larger (a decimated patch whose vertices were moved off the surface).
+std::optional<double> Extractor::clean_sigma(const std::vector<int>& region) const {
+  if (model_.features.noisy) return std::nullopt;
+  const auto& residual = model_.features.noise.vertex_residual_mm;
+  double sum = 0;
+  int count = 0;
+  for (int f : region)
+    for (int k = 0; k < 3; ++k) {
+      const float r = residual[static_cast<std::size_t>(mesh_.faces(f, k))];
+      if (std::isnan(r)) continue;
+      sum += static_cast<double>(r) * r, ++count;
+    }
+  const double local = count ? std::sqrt(sum / count) : 0;
+  return std::max(model_.features.noise.sigma_mm, local);
 }
 
 void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole) {
@@ -169,7 +228,13 @@ void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& sam
     p.n_up_spread_rad = up.facet_spread_rad, p.n_down_spread_rad = down.facet_spread_rad;
     p.curve = curve;
     p.hole = hole;
-    if (std::min(up.face_count, down.face_count) < static_cast<int>(min_region_faces)) {
+    p.mesh_deviation_mm = s.chord.sagitta_mm;
+    // A facet of a fan is exact at its middle: at most half a chord's turn along the edge from the point,
+    // which tilts its normal in the cross-section by up to (θ/2)²/2. A window's margin takes that off.
+    const double fan = std::pow(s.chord.turn_rad / 2, 2) / 2 / 3.5;
+    p.n_up_uncertainty_rad = std::hypot(p.n_up_uncertainty_rad, fan);
+    p.n_down_uncertainty_rad = std::hypot(p.n_down_uncertainty_rad, fan);
+    if (model_.features.noisy && std::min(up.face_count, down.face_count) < static_cast<int>(min_region_faces)) {
       p.probeable = false;
       p.reason = "too few faces beside the edge here to estimate the normal of both sides (a fold of scan noise?)";
     } else if (turn < distinct_sides_rad()) {
@@ -202,12 +267,15 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
   }
   for (const PolylineSample& s : sample_polyline(points, true, options_.spacing)) {
     const int face = loop.half_edges[s.segment] / 3;
-    const SideNormal side = side_normal(mesh_, faces_, finder.region(face, s.position, s.direction, radius_, along_),
-                                        s.position, s.direction, edge_turn(points, true, s));
+    const double along = along_edge(points, s);
+    const std::vector<int>& region = finder.region(face, s.position, s.direction, across_edge(face, s), along);
+    const SideNormal side =
+        side_normal(mesh_, faces_, region, s.position, s.direction, edge_turn(points, true, s, along), clean_sigma(region));
     EdgePoint p;
     p.id = static_cast<int>(model_.points.size());
     p.position = s.position;
     p.curve = loop_index;
+    p.mesh_deviation_mm = chord_deviation(points, true, s.segment).sagitta_mm;
     if (hole) {
       // The scan lost the wall: a bore wall is parallel to the axis and faces it.
       Vec3 to_axis = hole->centre - s.position;

@@ -19,12 +19,13 @@ namespace cmm::geometry {
 struct FeatureModelOptions {
   FeatureOptions features;
   double spacing = 2.0;  // between reference points along a curve, in mesh units
-  // Radius of the neighbourhood each side normal is estimated over, in mean edge lengths: wide
-  // enough to average scanner noise away, small enough to stay on the side's own face.
-  double neighbourhood_edges = 5.0;
-  double noisy_neighbourhood_edges = 18.0;
-  // ...but no farther than this along the edge, where a rim's turning normals would foreshorten.
-  double neighbourhood_along_edges = 7.0;
+  // Radius of the neighbourhood each side normal is fitted over, in units of the vertex noise σ (mm):
+  // wide enough to average the noise away (190 σ: 19 mm on a 0.1 mm scan), small enough to stay on
+  // the side's own face. Never less than the facets touching the edge and the row beyond them (so
+  // that a curved side's normal can be taken to the edge): on an exact mesh those alone are used.
+  double neighbourhood_sigmas = 190.0;
+  // ...and no farther than this along the edge, where a rim's turning normals would foreshorten.
+  double neighbourhood_along_sigmas = 75.0;
   // ...and within this turn of the normal where it starts, so it cannot wrap around a small bore.
   double neighbourhood_max_turn_deg = 30.0;
   // A wall the scan lost is taken square to the hole's axis; this is the standard error granted to
@@ -52,6 +53,9 @@ struct FeatureModel {
   std::vector<EdgePoint> points;
   std::vector<Hole> holes;
   int rejected_curves = 0;  // feature curves whose two sides turned out to face the same way
+  // Standard error of a reference point's position from the vertex noise: the noise σ, reduced by the
+  // smoothing of a noisy mesh's creases (a quadratic fit over 7 vertices keeps 1/3 of the variance).
+  double point_sigma_mm = 0;
 };
 
 // Throws TooManyPoints, or Cancelled when options.cancel asks.

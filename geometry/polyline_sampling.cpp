@@ -4,9 +4,16 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <numbers>
 
 namespace cmm::geometry {
+namespace {
+
+constexpr double max_arc_turn = std::numbers::pi / 3;  // a hexagon still samples a circle; a box corner does not
+
+}  // namespace
 
 std::vector<Vec3> smooth_polyline(const std::vector<Vec3>& points, bool closed, int half_window) {
   const int n = static_cast<int>(points.size());
@@ -105,6 +112,27 @@ Vec3 polyline_turn(const std::vector<Vec3>& points, bool closed, const PolylineS
   const Vec3 half = chord_turn(points, closed, sample, half_length / 2);
   if ((full - half).norm() > 0.15 * std::max(full.norm(), half.norm()) + 1e-3 / half_length) return Vec3::Zero();
   return full;
+}
+
+ChordDeviation chord_deviation(const std::vector<Vec3>& points, bool closed, int segment) {
+  const int n = static_cast<int>(points.size());
+  const int segments = closed ? n : n - 1;
+  auto direction = [&](int i) -> std::optional<Vec3> {  // of segment i, when there is one
+    if (closed) i = (i % n + n) % n;
+    else if (i < 0 || i >= segments) return std::nullopt;
+    const Vec3 d = points[(i + 1) % n] - points[i];
+    if (!(d.norm() > 0)) return std::nullopt;
+    return Vec3(d.normalized());
+  };
+  const auto before = direction(segment - 1), here = direction(segment), after = direction(segment + 1);
+  if (!before || !here || !after) return {};  // an open end: nothing says the curve bends there
+  // An arc turns the same way at both ends, by about the same angle and by less than a corner does.
+  const Vec3 turn_in = before->cross(*here), turn_out = here->cross(*after);
+  if (turn_in.dot(turn_out) <= 0) return {};
+  const double in = std::atan2(turn_in.norm(), before->dot(*here)), out = std::atan2(turn_out.norm(), here->dot(*after));
+  if (std::max(in, out) > max_arc_turn || std::max(in, out) > 2 * std::min(in, out)) return {};
+  const double turn = std::min(in, out);
+  return {turn, (points[(segment + 1) % n] - points[segment]).norm() * turn / 8};
 }
 
 }  // namespace cmm::geometry

@@ -3,8 +3,11 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <numbers>
 #include <utility>
 
 namespace cmm::geometry {
@@ -76,6 +79,7 @@ struct Sample {
   Vec3 normal;
   int face;
   Eigen::Quaterniond turn = Eigen::Quaterniond::Identity();  // applied to the facet's own normal
+  Vec3 centroid = Vec3::Zero();  // of the facet, or of the plane piece it stands for
 };
 
 struct Fit {
@@ -87,7 +91,9 @@ struct Fit {
   int parameters;
 };
 
-Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used) {
+// `min_count`: the effective number of samples the slopes need; a noisy side needs several per term
+// to tell a slope from noise, an exact one only one more than the terms.
+Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used, double min_count) {
   Eigen::Matrix<double, terms, terms> xtwx = Eigen::Matrix<double, terms, terms>::Zero();
   Eigen::Matrix<double, terms, 3> xtwn = Eigen::Matrix<double, terms, 3>::Zero();
   double w_sum = 0, w2_sum = 0;
@@ -102,11 +108,24 @@ Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used) {
   Fit result{Vec3::Zero(), 0, Eigen::Matrix<double, terms, 3>::Zero(), Terms::Zero(), 1};
   if (w_sum <= 0) return result;
   mean /= w_sum;
+  // A slope is only fitted along a coordinate the samples spread over: where they all sit at one
+  // distance from the edge (the merged columns of a bore's wall, all at mid-height), taking the field
+  // to the edge would extrapolate along a direction with no data. Such a term is left out.
+  int active = 1;
+  for (int k = 1; k < terms; ++k) {
+    const double m = xtwx(0, k) / w_sum, spread = std::sqrt(std::max(0.0, xtwx(k, k) / w_sum - m * m));
+    if (spread > 1e-9 && spread >= 0.2 * std::abs(m)) {
+      ++active;
+      continue;
+    }
+    xtwx.row(k).setZero(), xtwx.col(k).setZero(), xtwn.row(k).setZero();
+    xtwx(k, k) = 1;
+  }
   const double effective_count = w_sum * w_sum / w2_sum;
   Eigen::Matrix<double, terms, 3> linear = Eigen::Matrix<double, terms, 3>::Zero();
   linear.row(0) = mean.transpose();
   const Eigen::LDLT<Eigen::Matrix<double, terms, terms>> solver(xtwx);
-  const bool solvable = effective_count >= 4 * terms && solver.info() == Eigen::Success && solver.rcond() > 1e-12;
+  const bool solvable = active > 1 && effective_count >= min_count && solver.info() == Eigen::Success && solver.rcond() > 1e-12;
   if (solvable) linear = solver.solve(xtwn);
   double rss_mean = 0, rss_linear = 0;
   for (std::size_t i = 0; i < samples.size(); ++i) {
@@ -115,13 +134,13 @@ Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used) {
     rss_linear += samples[i].weight * (samples[i].normal - linear.transpose() * samples[i].x).squaredNorm();
   }
   // Keep the slopes only when they explain far more than noise would (an F-test at a wide margin).
-  const double noise_per_dof = rss_linear / std::max(1.0, effective_count - terms);
-  const bool curved = solvable && rss_mean - rss_linear > 10 * (terms - 1) * noise_per_dof + 1e-30;
+  const double noise_per_dof = rss_linear / std::max(1.0, effective_count - active);
+  const bool curved = solvable && rss_mean - rss_linear > 10 * (active - 1) * noise_per_dof + 1e-30;
   result.coefficients = curved ? linear : Eigen::Matrix<double, terms, 3>::Zero();
   if (!curved) result.coefficients.row(0) = mean.transpose();
   result.spread_squared = (curved ? rss_linear : rss_mean) / w_sum;
   result.intercept_weights = curved ? Terms(solver.solve(Terms::Unit(0))) : Terms(Terms::Unit(0) / w_sum);
-  result.parameters = curved ? terms : 1;
+  result.parameters = curved ? active : 1;
   result.normal = result.coefficients.row(0).transpose();
   return result;
 }
@@ -133,7 +152,8 @@ Fit fit(const std::vector<Sample>& samples, const std::vector<char>& used) {
 // So the vertex noise is estimated from the facets' residuals (E|δn_f|² = σ_v² Σ_v |∂n_f/∂v|²) and
 // carried through the fit's linear weights to the normal by the chain rule, vertex by vertex.
 double vertex_noise_uncertainty(const TriangleMesh& mesh, const std::vector<Sample>& samples,
-                                const std::vector<char>& used, const Fit& fit, const Vec3& tangent) {
+                                const std::vector<char>& used, const Fit& fit, const Vec3& tangent,
+                                std::optional<double> given_sigma_mm) {
   if (fit.normal.squaredNorm() == 0) return 0;
   // Only the normal's turn about the edge moves a probe window: its error along tangent × n.
   const Vec3 turn_direction = tangent.cross(fit.normal.normalized()).normalized();
@@ -161,10 +181,15 @@ double vertex_noise_uncertainty(const TriangleMesh& mesh, const std::vector<Samp
     weighted_gain += a.weight * gain / (double_area * double_area);
     w_sum += a.weight, w2_sum += a.weight * a.weight;
   }
-  if (!(weighted_gain > 0)) return 0;
+  if (!(weighted_gain > 0) && !given_sigma_mm) return 0;
   const double effective_count = w_sum * w_sum / w2_sum;
-  const double vertex_variance =
-      weighted_residual / weighted_gain * effective_count / std::max(1.0, effective_count - fit.parameters);
+  const double dof = effective_count - fit.parameters;
+  const double from_residuals = weighted_gain > 0 ? weighted_residual / weighted_gain * effective_count / std::max(1.0, dof) : 0;
+  // A clean mesh's figure is the whole mesh's; where its facets here misfit the field by more (a
+  // decimated patch whose vertices were moved), that local figure counts, once there are enough facets
+  // to tell (three more than the field's terms).
+  const double vertex_variance = !given_sigma_mm ? from_residuals
+                                 : std::max(*given_sigma_mm * *given_sigma_mm, dof >= 3 ? from_residuals : 0.0);
   std::sort(to_turn.begin(), to_turn.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   double sum = 0;
   for (std::size_t i = 0; i < to_turn.size();) {
@@ -179,13 +204,13 @@ double vertex_noise_uncertainty(const TriangleMesh& mesh, const std::vector<Samp
 // The fit with one robust refit: facets folded by noise where two sides meet are outliers with
 // leverage on the value at the edge, so those far outside the spread are dropped and the field
 // fitted again. `used` says which facets the returned fit rests on.
-Fit robust_fit(const std::vector<Sample>& samples, std::vector<char>& used) {
+Fit robust_fit(const std::vector<Sample>& samples, std::vector<char>& used, double min_count) {
   used.assign(samples.size(), 1);
-  const Fit first = fit(samples, used);
+  const Fit first = fit(samples, used, min_count);
   const double limit_squared = std::max(9 * first.spread_squared, 1e-12);
   for (std::size_t i = 0; i < samples.size(); ++i)
     used[i] = (samples[i].normal - first.coefficients.transpose() * samples[i].x).squaredNorm() <= limit_squared;
-  const Fit second = fit(samples, used);
+  const Fit second = fit(samples, used, min_count);
   if (second.normal.squaredNorm() > 0) return second;
   used.assign(samples.size(), 1);
   return first;
@@ -193,25 +218,137 @@ Fit robust_fit(const std::vector<Sample>& samples, std::vector<char>& used) {
 
 }  // namespace
 
+namespace {
+
+// Jackknife standard error of the fitted normal's turn about the edge: the fit repeated without each of
+// up to 32 groups of facets in turn (a delete-a-group jackknife, so that a big region costs 32 fits).
+// On a clean mesh the propagated vertex noise says nothing of facets that lie together (a decimated
+// patch whose vertices the collapse moved, a few large facets taken to the edge): how much the answer
+// hangs on single facets does. Nothing on an exact plane or a regular fan.
+double jackknife_uncertainty(const std::vector<Sample>& samples, const std::vector<char>& used, const Fit& full,
+                             const Vec3& tangent, double min_count) {
+  const Vec3 reference = full.normal.normalized();
+  const Vec3 in_plane = tangent.cross(reference);
+  const auto count = static_cast<std::size_t>(std::count(used.begin(), used.end(), 1));
+  const std::size_t groups = std::min<std::size_t>(count, 32);
+  if (groups < 2) return 0;
+  std::vector<std::size_t> group_of(samples.size(), 0);
+  for (std::size_t i = 0, k = 0; i < samples.size(); ++i)
+    if (used[i]) group_of[i] = k++ % groups;
+  std::vector<double> turns;
+  std::vector<char> without(samples.size());
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (std::size_t i = 0; i < samples.size(); ++i) without[i] = used[i] && group_of[i] != g;
+    const Fit partial = fit(samples, without, min_count);
+    if (partial.normal.squaredNorm() == 0) continue;
+    turns.push_back(std::asin(std::clamp(partial.normal.normalized().dot(in_plane), -1.0, 1.0)));
+  }
+  const auto n = static_cast<double>(turns.size());
+  if (n < 2) return 0;
+  double mean = 0;
+  for (double t : turns) mean += t / n;
+  double sum = 0;
+  for (double t : turns) sum += (t - mean) * (t - mean);
+  return std::sqrt((n - 1) / n * sum);
+}
+
+// The clean mesh's share, sized for a window's margin (3.5 of it): 5/8 of the fit's correction of the
+// seed facet in the cross-section plane (the facet is exact half a row from the edge, and what the linear
+// fit leaves of that is second order: on the test parts' CAD rows of 5° and 18°, at most 0.58 of it),
+// and the second-order part (1 − cos β ≈ β²/2) of its turn β along the edge.
+double tessellation_uncertainty(const SideNormal& fitted, const Vec3& seed_normal, const Vec3& tangent) {
+  const Vec3 in_plane = tangent.cross(fitted.normal);
+  const double across = std::asin(std::clamp((seed_normal - fitted.normal).dot(in_plane), -1.0, 1.0));
+  const double along = std::asin(std::clamp((seed_normal - fitted.normal).dot(tangent), -1.0, 1.0));
+  return (0.625 * std::abs(across) + along * along / 2) / 3.5;
+}
+
+SideNormal fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+                              const Vec3& point, const Vec3& tangent, const Vec3& turn,
+                              std::optional<double> clean_sigma_mm);
+
+}  // namespace
+
 SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
-                       const Vec3& point, const Vec3& tangent, const Vec3& turn) {
+                       const Vec3& point, const Vec3& tangent, const Vec3& turn, std::optional<double> clean_sigma_mm) {
+  SideNormal result = fitted_side_normal(mesh, faces, region, point, tangent, turn, clean_sigma_mm);
+  if (!clean_sigma_mm || region.empty() || result.normal.squaredNorm() == 0) return result;
+  // Where the vertices lie on the surface (within 5 µm: a facet of 1 mm is then exact to 0.3°), the facet
+  // touching the edge carries the side to within its chord angle: the turn to the facets in the next two
+  // rows. A fit that moves the normal farther than that follows something the facets at the edge do not
+  // show (a blend beyond them, a blade's rounded nose): the facet is kept then, with half that chord
+  // angle as its error. A decimated patch's facets are not exact, and there the fit stands.
+  const Vec3 seed = faces.normals.row(region.front()).transpose();
+  auto across = [&](const Vec3& p) {
+    const Vec3 offset = p - point;
+    return (offset - offset.dot(tangent) * tangent).norm();
+  };
+  auto turn_from_seed = [&](const Vec3& n) { return std::abs(std::asin(std::clamp(n.dot(tangent.cross(seed)), -1.0, 1.0))); };
+  double seed_height = 0;
+  for (int k = 0; k < 3; ++k) seed_height = std::max(seed_height, across(vertex(mesh, mesh.faces(region.front(), k))));
+  const double seed_depth = across(face_centroid(mesh, region.front()));
+  double chord = 0;
+  for (int f : region) {
+    const double d = across(face_centroid(mesh, f));
+    if (d > 1.01 * seed_depth && d <= seed_depth + 2 * seed_height)
+      chord = std::max(chord, turn_from_seed(faces.normals.row(f).transpose()));
+  }
+  constexpr double slack = 0.1 * std::numbers::pi / 180;
+  // Facets coplanar with the seed for two rows: the side is a plane at the edge, and the facet is exact
+  // there whatever a wider fit says of the blend beyond.
+  const bool planar = chord < 1e-6;
+  if ((planar || *clean_sigma_mm < 0.005) && turn_from_seed(result.normal) > chord + slack) {
+    result.normal = seed;
+    result.uncertainty_rad = std::hypot(result.uncertainty_rad, (chord / 2 + slack) / 3.5);
+    return result;
+  }
+  result.uncertainty_rad = std::hypot(result.uncertainty_rad, tessellation_uncertainty(result, seed, tangent));
+  return result;
+}
+
+namespace {
+
+SideNormal fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+                              const Vec3& point, const Vec3& tangent, const Vec3& turn,
+                              std::optional<double> clean_sigma_mm) {
   SideNormal result;
   std::vector<Sample> samples;
   samples.reserve(region.size());
+  // On a clean mesh, facets with one normal are one plane piece (a CAD quad cut in two, a planar face cut
+  // in many): their normal is exact at the piece's centroid, not at each triangle's, which would put one
+  // normal at two distances from the edge and flatten the fitted slope.
+  std::map<std::array<double, 3>, std::size_t> piece_of;
+  std::vector<Vec3> moments;  // area × centroid, per sample
   for (int f : region) {
-    const Vec3 offset = face_centroid(mesh, f) - point;
+    const Vec3 n = faces.normals.row(f).transpose();
+    const std::array<double, 3> key{std::round(n.x() * 1e9), std::round(n.y() * 1e9), std::round(n.z() * 1e9)};
+    const auto [it, added] = clean_sigma_mm ? piece_of.try_emplace(key, samples.size()) : std::pair{piece_of.end(), true};
+    if (!added) {
+      samples[it->second].weight += faces.areas[f];
+      moments[it->second] += faces.areas[f] * face_centroid(mesh, f);
+      continue;
+    }
+    samples.push_back({faces.areas[f], Terms::Zero(), n, f, Eigen::Quaterniond::Identity()});
+    moments.push_back(faces.areas[f] * face_centroid(mesh, f));
+  }
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Vec3 centroid = samples[i].weight > 0 ? Vec3(moments[i] / samples[i].weight) : face_centroid(mesh, samples[i].face);
+    const Vec3 offset = centroid - point;
     const double s = offset.dot(tangent);
-    samples.push_back({faces.areas[f], terms_at(s, (offset - s * tangent).norm()), faces.normals.row(f).transpose(), f,
-                       Eigen::Quaterniond::Identity()});
+    samples[i].x = terms_at(s, (offset - s * tangent).norm());
+    samples[i].centroid = centroid;
   }
   std::vector<char> used;
-  const Fit plain = robust_fit(samples, used);
+  const double min_count = clean_sigma_mm ? terms + 1 : 4 * terms;
+  const Fit plain = robust_fit(samples, used, min_count);
   result.face_count = static_cast<int>(std::count(used.begin(), used.end(), 1));
   result.normal = plain.normal.normalized();
   result.facet_spread_rad = std::sqrt(plain.spread_squared);
   const double curvature = turn.norm();
   if (!(curvature > 1e-6) || plain.normal.squaredNorm() == 0) {
-    result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent);
+    result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent, clean_sigma_mm);
+    if (clean_sigma_mm && plain.normal.squaredNorm() > 0)
+      result.uncertainty_rad = std::max(result.uncertainty_rad, jackknife_uncertainty(samples, used, plain, tangent, min_count));
     return result;
   }
 
@@ -223,24 +360,28 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   const Vec3 to_point = -axis.cross(tangent).normalized() / curvature;  // centre of curvature → point
   std::vector<Sample> turned = samples;
   for (Sample& a : turned) {
-    const Vec3 from_axis = face_centroid(mesh, a.face) - point + to_point;
+    const Vec3 from_axis = a.centroid - point + to_point;
     const Vec3 across_axis = from_axis - from_axis.dot(axis) * axis;
     const double angle = std::atan2(axis.dot(to_point.cross(across_axis)), to_point.dot(across_axis));
     a.turn = Eigen::AngleAxisd(-angle, axis);
     a.normal = a.turn * a.normal;
   }
   std::vector<char> turned_used;
-  const Fit fitted = robust_fit(turned, turned_used);
+  const Fit fitted = robust_fit(turned, turned_used, min_count);
   if (fitted.normal.squaredNorm() == 0) {
-    result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent);
+    result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent, clean_sigma_mm);
     return result;
   }
   const Vec3 across = fitted.normal.normalized();
   result.normal = (across - across.dot(tangent) * tangent + result.normal.dot(tangent) * tangent).normalized();
-  result.uncertainty_rad = vertex_noise_uncertainty(mesh, turned, turned_used, fitted, tangent);
+  result.uncertainty_rad = vertex_noise_uncertainty(mesh, turned, turned_used, fitted, tangent, clean_sigma_mm);
+  if (clean_sigma_mm)
+    result.uncertainty_rad = std::max(result.uncertainty_rad, jackknife_uncertainty(turned, turned_used, fitted, tangent, min_count));
   result.face_count = static_cast<int>(std::count(turned_used.begin(), turned_used.end(), 1));
   result.facet_spread_rad = std::sqrt(fitted.spread_squared);  // about the field the turn left
   return result;
 }
+
+}  // namespace
 
 }  // namespace cmm::geometry

@@ -2,6 +2,7 @@
 // near the point (thesis §5.1's up/down patch normals), with its uncertainty.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "geometry/edge_adjacency.hpp"
@@ -54,7 +55,15 @@ class SideRegionFinder {
 // the circle's axis and the field fitted again. Without that, the fit's linear term follows the turn
 // to first order only, and the second order leans a rim's normals by ~0.2° on a 25 mm circle even on
 // an exact mesh. The normal's component along the edge stays the plain fit's.
+//
+// The uncertainty propagates the vertex noise through the fit. On a noisy mesh the noise is estimated
+// from the facets' residuals about the field. On a clean one (`clean_sigma_mm` given: the mesh's
+// measured vertex noise) the residuals are the tessellation's, not noise: the noise given is used, and
+// the facets' chord angle is added, sized so that a window's margin is 5/8 of how far the fit moved the
+// normal from the facet touching the edge (region.front(), the seed): nothing on a plane, where the two
+// agree; on a curved side the fit's correction bounds what is left of the chord error.
 SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
-                       const Vec3& point, const Vec3& tangent, const Vec3& turn = Vec3::Zero());
+                       const Vec3& point, const Vec3& tangent, const Vec3& turn = Vec3::Zero(),
+                       std::optional<double> clean_sigma_mm = std::nullopt);
 
 }  // namespace cmm::geometry

@@ -2,6 +2,7 @@
 // and holes, registers S to M, plans windows, touches and the ordered move program, writes the plan
 // JSON (and DMIS) and prints a summary an operator can read at a glance.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -110,8 +111,12 @@ void print_summary(const Options& o, const StageTimes& times, const geometry::Fe
   std::printf("topology   %d component(s), %s, %zu boundary edges in %zu loops, %zu non-manifold edges%s\n",
               t.components, t.closed() ? "closed" : "open", t.boundary_edges, model.loops.size(), t.non_manifold_edges,
               t.inconsistently_oriented_edges ? ", ORIENTATION INCONSISTENT" : "");
-  std::printf("surface    median dihedral %.2f deg -> %s\n", model.features.median_dihedral_deg,
-              model.features.noisy ? "noisy: normals filtered before feature detection" : "clean");
+  double deviation = 0;
+  for (const auto& p : model.points) deviation = std::max(deviation, p.mesh_deviation_mm);
+  std::printf("surface    vertex noise sigma %.4f mm on %d of %d vertices -> %s; crease chords up to %.4f mm off the edge\n",
+              model.features.noise.sigma_mm, model.features.noise.measured, model.features.noise.sampled,
+              model.features.noisy ? "noisy: normals filtered, sides fitted over the neighbourhood" : "clean: sides from the facets at the edge",
+              deviation);
   std::printf("features   %zu sharp curves over %g deg\n", model.features.curves.size(), in.feature_angle_deg);
   std::printf("points     %zu reference edge points every %g: %zu sharp edge, %zu hole rim, %zu open boundary; %zu convex\n",
               model.points.size(), in.spacing, sharp, rim, boundary, convex);
@@ -139,6 +144,17 @@ void print_summary(const Options& o, const StageTimes& times, const geometry::Fe
               "%d of %zu bores\n",
               machine.active_tip.c_str(), in.probe_radius, in.delta, methods["two_touch"], methods["faces"],
               methods["none"], bored, plan.bores.size());
+  // What is not probeable and why, most frequent first: the operator's list of what to fix in the mesh.
+  std::map<std::string, int> reasons;
+  for (const auto& e : plan.edges)
+    if (e.method == planner::EdgeMethod::none) ++reasons[e.reason.substr(0, e.reason.find(" (")).substr(0, 120)];
+  std::vector<std::pair<int, std::string>> by_count;
+  for (const auto& [reason, count] : reasons) by_count.emplace_back(count, reason);
+  std::sort(by_count.rbegin(), by_count.rend());
+  std::printf("probeable  %zu of %zu edge points (%.1f %%)\n", plan.edges.size() - static_cast<std::size_t>(methods["none"]),
+              plan.edges.size(), plan.edges.empty() ? 0.0 : 100.0 * (1.0 - static_cast<double>(methods["none"]) / static_cast<double>(plan.edges.size())));
+  for (std::size_t i = 0; i < std::min<std::size_t>(by_count.size(), 5); ++i)
+    std::printf("  not      %5d x %s\n", by_count[i].first, by_count[i].second.c_str());
   std::printf("program    %zu touches, clearance plane z %.3f: estimated %.1f s (lower bound %.1f s)\n",
               plan.program.touches.size(), plan.clearance_z, plan.program.time_s, plan.program.lower_bound_s);
   std::printf("plan       written to %s%s\n", o.output.c_str(), o.dmis.empty() ? "" : (", DMIS to " + o.dmis).c_str());
@@ -160,8 +176,7 @@ int plan(Options o) {
   model_options.feature_angle_deg = inputs.feature_angle_deg;
   planner::ReferenceModel reference = planner::load_reference_model(o.model, machine.travel_box, model_options);
   reference.inputs.probe_radius = inputs.probe_radius;
-  reference.inputs.delta = inputs.delta;
-  reference.inputs.delta_source = inputs.delta_source;
+  planner::settle_delta(reference.inputs, inputs.delta, inputs.delta_source, reference.features);
   reference.inputs.notes = inputs.notes;
   inputs = reference.inputs;
   const geometry::TriangleMesh& mesh = reference.mesh;

@@ -94,6 +94,7 @@ json to_json(const geometry::EdgePoint& p) {
       {"interior_angle_deg", p.interior_angle_rad ? json(degrees(*p.interior_angle_rad)) : json(nullptr)},
       {"normal_uncertainty_deg", {degrees(p.n_up_uncertainty_rad), degrees(p.n_down_uncertainty_rad)}},
       {"facet_spread_deg", {degrees(p.n_up_spread_rad), degrees(p.n_down_spread_rad)}},
+      {"mesh_deviation_mm", p.mesh_deviation_mm},
       {"probeable", p.probeable},
       {"reason", p.reason.empty() ? json(nullptr) : json(p.reason)},
       {"curve", p.curve},
@@ -125,6 +126,16 @@ PlanSummary plan_summary_from_json(const json& plan) {
   return summary;
 }
 
+namespace {
+
+double max_mesh_deviation(const geometry::FeatureModel& model) {
+  double most = 0;
+  for (const auto& p : model.points) most = std::max(most, p.mesh_deviation_mm);
+  return most;
+}
+
+}  // namespace
+
 json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, const MeasurementPlan* plan,
                const description::MachineDescription* machine, const json& registration) {
   const auto& t = model.topology;
@@ -150,9 +161,11 @@ json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, co
           {"euler_characteristic", t.euler_characteristic},
           {"boundary_loops", model.loops.size()}}},
         {"noise",
-         {{"median_dihedral_deg", model.features.median_dihedral_deg},
+         {{"sigma_mm", model.features.noise.sigma_mm},
+          {"vertices_measured", model.features.noise.measured},
+          {"vertices_sampled", model.features.noise.sampled},
           {"treated_as_noisy", model.features.noisy},
-          {"mean_edge_length", model.features.mean_edge_length}}}}},
+          {"mesh_deviation_max_mm", max_mesh_deviation(model)}}}}},
       {"spacing", inputs.spacing},
       {"feature_angle_deg", inputs.feature_angle_deg},
       {"probe_radius", inputs.probe_radius},
@@ -166,7 +179,11 @@ json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, co
       {"estimate", nullptr},
       {"notes", inputs.notes},
   };
-  for (const auto& p : model.points) out["edge_points"].push_back(to_json(p));
+  for (const auto& p : model.points) {
+    json point = to_json(p);
+    point["delta"] = inputs.delta + p.mesh_deviation_mm;  // what its window and search were made for
+    out["edge_points"].push_back(std::move(point));
+  }
   for (const auto& h : model.holes) out["holes"].push_back(to_json(h));
   if (!plan || !machine) return out;
   for (std::size_t i = 0; i < plan->edges.size(); ++i) add_edge_plan(out["edge_points"][i], plan->edges[i]);

@@ -1,10 +1,12 @@
 // Model file to reference model; see reference_model.hpp.
 #include "planner/reference_model.hpp"
 
+#include <algorithm>
 #include <sstream>
 #include <variant>
 
 #include "geometry/mesh_io.hpp"
+#include "planner/number_text.hpp"
 
 namespace cmm::planner {
 
@@ -74,6 +76,15 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const des
     throw ModelError(Kind::features, file, name + ": " + e.what());
   }
   return m;
+}
+
+void settle_delta(PlanInputs& inputs, double given, const std::string& source, const geometry::FeatureModel& model) {
+  const double sigma = model.features.noise.sigma_mm, point = model.point_sigma_mm;
+  inputs.delta = std::max(given, 3 * point);
+  inputs.delta_source = source + "; the mesh's vertex noise sigma " + fixed(sigma * 1e3, 1) + " um on " +
+                        std::to_string(model.features.noise.measured) + " vertices, " + fixed(point * 1e3, 1) +
+                        " um on a reference point" + (3 * point > given ? ", so delta is raised to 3 of those" : ", within it") +
+                        "; each point adds the mesh's own distance from its edge (mesh_deviation_mm)";
 }
 
 }  // namespace cmm::planner

@@ -128,19 +128,25 @@ EdgePlan plan_edge_point(const geometry::EdgePoint& point, const Eigen::Isometry
     plan.reason = "an open boundary: the scan saw one side only, there is nothing to touch against";
     return plan;
   }
-  const WindowResult window = probe_window(point, options.radius, options.delta, options.window);
+  // Where the mesh's crease is itself off the true edge (a coarse fan's chord), the point's δ grows by it.
+  TouchPlanOptions o = options;
+  o.delta += point.mesh_deviation_mm;
+  const WindowResult window = probe_window(point, o.radius, o.delta, o.window);
   if (window.usable) {
     plan.window = window.window;
     ProbeWindow in_m = window.window;
     in_m.axis = T_M_S.linear() * in_m.axis;
     in_m.bisector = T_M_S.linear() * in_m.bisector;
     in_m.plane_normal = T_M_S.linear() * in_m.plane_normal;
-    if (plan_two_touch(plan, in_m, T_M_S * point.position, clearance, options)) return plan;
+    if (plan_two_touch(plan, in_m, T_M_S * point.position, clearance, o)) return plan;
   } else {
     plan.reason = window.reason;
+    if (point.mesh_deviation_mm > 0.25 * options.delta)
+      plan.reason += " (delta here " + fixed(o.delta, 3) + " mm, of which " + fixed(point.mesh_deviation_mm, 3) +
+                     " mm is the mesh's own distance from the edge: its crease is a chord of a coarse tessellation)";
   }
   const std::string why_not_two = plan.reason;
-  if (plan_faces(plan, point, T_M_S, clearance, options)) {
+  if (plan_faces(plan, point, T_M_S, clearance, o)) {
     plan.reason = why_not_two + ": measured on its two faces";
     return plan;
   }

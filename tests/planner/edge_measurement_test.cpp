@@ -19,12 +19,17 @@
 #include "geometry/feature_model.hpp"
 #include "planner/edge_compensation.hpp"
 #include "planner/touch_planning.hpp"
+#include "true_edge_checks.hpp"
 
 namespace cmm::planner {
 namespace {
 
 using geometry::AnalyticPart;
 using geometry::testing::nearest_true_edge;
+using testing::angle_in_fan;
+using testing::corners_of;
+using testing::distance_to;
+using testing::sharp_segments;
 constexpr double deg = std::numbers::pi / 180;
 
 struct PartCase {
@@ -53,54 +58,6 @@ std::vector<PartCase> cases() {
       {"hemisphere_cone_low", [](double h) { return make_hemisphere_cone(25, 12.5, h); }, 0.25, 2.0, 0.1},
       {"hemisphere_cone_high", [](double h) { return make_hemisphere_cone(25, 25, h); }, 0.25, 2.0, 0.1},
   };
-}
-
-// The true part's own sharp edges (dihedral over 20°): the polyline the ball can actually meet.
-// On a revolved part or a bore it is the circle's chords, within 0.3 µm of the circle at the
-// revolved parts' 0.25 mm edges, but up to 25 µm at the block's 2 mm; the sweep is judged
-// against these, the analytic circle is reported beside.
-std::vector<std::pair<Vec3, Vec3>> sharp_segments(const geometry::TriangleMesh& mesh) {
-  std::map<std::pair<int, int>, std::vector<int>> faces_of;
-  for (int f = 0; f < mesh.faces.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = mesh.faces(f, k), b = mesh.faces(f, (k + 1) % 3);
-      faces_of[{std::min(a, b), std::max(a, b)}].push_back(f);
-    }
-  auto normal = [&](int f) {
-    const Vec3 a = geometry::vertex(mesh, mesh.faces(f, 0)), b = geometry::vertex(mesh, mesh.faces(f, 1)), c = geometry::vertex(mesh, mesh.faces(f, 2));
-    return (b - a).cross(c - a).normalized().eval();
-  };
-  std::vector<std::pair<Vec3, Vec3>> segments;
-  for (const auto& [edge, faces] : faces_of)
-    if (faces.size() == 2 && normal(faces[0]).dot(normal(faces[1])) < std::cos(20 * deg))
-      segments.push_back({geometry::vertex(mesh, edge.first), geometry::vertex(mesh, edge.second)});
-  return segments;
-}
-
-// Where three or more sharp segments meet: the corners of the part.
-std::vector<Vec3> corners_of(const std::vector<std::pair<Vec3, Vec3>>& segments) {
-  std::map<std::array<double, 3>, int> degree;
-  for (const auto& [a, b] : segments)
-    for (const Vec3& v : {a, b}) ++degree[{v.x(), v.y(), v.z()}];
-  std::vector<Vec3> corners;
-  for (const auto& [v, count] : degree)
-    if (count >= 3) corners.emplace_back(v[0], v[1], v[2]);
-  return corners;
-}
-
-double distance_to(const std::vector<std::pair<Vec3, Vec3>>& segments, const Vec3& p) {
-  double best = 1e300;
-  for (const auto& [a, b] : segments) {
-    const double t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
-    best = std::min(best, (a + t * (b - a) - p).norm());
-  }
-  return best;
-}
-
-// Angle of a direction from the fan's axis within the fan's plane, and its tilt out of the plane.
-double angle_in_fan(const Vec3& d, const Vec3& axis, const Vec3& plane_normal) {
-  const Vec3 in_plane = (d - d.dot(plane_normal) * plane_normal).normalized();
-  return std::atan2(in_plane.cross(axis).norm(), in_plane.dot(axis));
 }
 
 class EdgeMeasurement : public ::testing::TestWithParam<PartCase> {};
