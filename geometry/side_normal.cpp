@@ -267,6 +267,28 @@ SideNormal fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& face
                               const Vec3& point, const Vec3& tangent, const Vec3& turn,
                               std::optional<double> clean_sigma_mm);
 
+// The turn about the edge from the facet touching it (region.front()) to the facets of the next two rows:
+// how far that facet's normal may be from the side's at the edge.
+double chord_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+                   const Vec3& point, const Vec3& tangent) {
+  const int seed = region.front();
+  const Vec3 in_plane = tangent.cross(Vec3(faces.normals.row(seed).transpose()));
+  auto across = [&](const Vec3& p) {
+    const Vec3 offset = p - point;
+    return (offset - offset.dot(tangent) * tangent).norm();
+  };
+  double height = 0;
+  for (int k = 0; k < 3; ++k) height = std::max(height, across(vertex(mesh, mesh.faces(seed, k))));
+  const double depth = across(face_centroid(mesh, seed));
+  double chord = 0;
+  for (int f : region) {
+    const double d = across(face_centroid(mesh, f));
+    if (d > 1.01 * depth && d <= depth + 2 * height)
+      chord = std::max(chord, std::abs(std::asin(std::clamp(faces.normals.row(f).dot(in_plane), -1.0, 1.0))));
+  }
+  return chord;
+}
+
 }  // namespace
 
 SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
@@ -274,30 +296,18 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   SideNormal result = fitted_side_normal(mesh, faces, region, point, tangent, turn, clean_sigma_mm);
   if (!clean_sigma_mm || region.empty() || result.normal.squaredNorm() == 0) return result;
   // Where the vertices lie on the surface (within 5 µm: a facet of 1 mm is then exact to 0.3°), the facet
-  // touching the edge carries the side to within its chord angle: the turn to the facets in the next two
-  // rows. A fit that moves the normal farther than that follows something the facets at the edge do not
-  // show (a blend beyond them, a blade's rounded nose): the facet is kept then, with half that chord
-  // angle as its error. A decimated patch's facets are not exact, and there the fit stands.
+  // touching the edge carries the side to within its chord angle. A fit that moves the normal farther
+  // than that follows something the facets at the edge do not show (a blend beyond them, a blade's
+  // rounded nose): the facet is kept then, with half that chord angle as its error. A decimated patch's
+  // facets are not exact, and there the fit stands.
   const Vec3 seed = faces.normals.row(region.front()).transpose();
-  auto across = [&](const Vec3& p) {
-    const Vec3 offset = p - point;
-    return (offset - offset.dot(tangent) * tangent).norm();
-  };
-  auto turn_from_seed = [&](const Vec3& n) { return std::abs(std::asin(std::clamp(n.dot(tangent.cross(seed)), -1.0, 1.0))); };
-  double seed_height = 0;
-  for (int k = 0; k < 3; ++k) seed_height = std::max(seed_height, across(vertex(mesh, mesh.faces(region.front(), k))));
-  const double seed_depth = across(face_centroid(mesh, region.front()));
-  double chord = 0;
-  for (int f : region) {
-    const double d = across(face_centroid(mesh, f));
-    if (d > 1.01 * seed_depth && d <= seed_depth + 2 * seed_height)
-      chord = std::max(chord, turn_from_seed(faces.normals.row(f).transpose()));
-  }
+  const double chord = chord_angle(mesh, faces, region, point, tangent);
+  const double correction = std::abs(std::asin(std::clamp(result.normal.dot(tangent.cross(seed)), -1.0, 1.0)));
   constexpr double slack = 0.1 * std::numbers::pi / 180;
   // Facets coplanar with the seed for two rows: the side is a plane at the edge, and the facet is exact
   // there whatever a wider fit says of the blend beyond.
   const bool planar = chord < 1e-6;
-  if ((planar || *clean_sigma_mm < 0.005) && turn_from_seed(result.normal) > chord + slack) {
+  if ((planar || *clean_sigma_mm < 0.005) && correction > chord + slack) {
     result.normal = seed;
     result.uncertainty_rad = std::hypot(result.uncertainty_rad, (chord / 2 + slack) / 3.5);
     return result;
