@@ -61,7 +61,10 @@ class SideRegionFinder {
 // measured vertex noise) the residuals are the tessellation's, not noise: the noise given is used, and
 // the facets' chord angle is added, sized so that a window's margin is 5/8 of how far the fit moved the
 // normal from the facet touching the edge (region.front(), the seed): nothing on a plane, where the two
-// agree; on a curved side the fit's correction bounds what is left of the chord error.
+// agree; on a curved side the fit's correction bounds what is left of the chord error. Where the fit
+// moves the normal farther than the edge facet's chord angle (the turn to the next two rows) on a side
+// that is planar there or whose vertices lie on the surface, it is following a blend beyond the edge,
+// and the edge facet is kept with half its chord angle as error.
 SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
                        const Vec3& point, const Vec3& tangent, const Vec3& turn = Vec3::Zero(),
                        std::optional<double> clean_sigma_mm = std::nullopt);
