@@ -16,6 +16,7 @@ constexpr int max_samples = 8'000;  // a median of 8,000 is good to ~2 %
 constexpr std::size_t min_support = 10;  // points for a 6-term quadric with some to spare
 constexpr std::size_t max_support_faces = 400;
 constexpr double max_support_turn = 0.35;  // rad
+constexpr int max_valence = 64;
 
 using Quadric = Eigen::Matrix<double, 6, 1>;
 
@@ -110,6 +111,9 @@ SurfaceNoise surface_noise(const TriangleMesh& mesh, const EdgeAdjacency& adjace
   std::vector<Local> points;
   for (int v = 0; v < vertex_count; v += stride) {
     ++result.sampled;
+    // A vertex in hundreds of faces (a fan's apex, or a hostile file's one vertex in a million) has no
+    // quadric neighbourhood worth fitting, and grouping its faces costs its valence squared: skipped.
+    if (vf.start[v + 1] - vf.start[v] > max_valence) continue;
     ring.assign(vf.faces.begin() + vf.start[v], vf.faces.begin() + vf.start[v + 1]);
     std::erase_if(ring, [&](int f) { return !(faces.areas[f] > 0); });
     if (ring.empty()) continue;
