@@ -41,8 +41,7 @@ std::vector<int> Extractor::bores(SideRegionFinder& finder, std::vector<Rim>& ri
   for (Rim& rim : rims) {
     const std::vector<int>& wall = finder.patch(rim.wall_face);
     const int key = *std::min_element(wall.begin(), wall.end());
-    const Vec3 axis = wall_axis(rim, wall);
-    rim.axis = axis.dot(rim.axis) >= 0 ? axis : Vec3(-axis);
+    fit_wall_axis(rim, wall);
     measure_wall_draft(rim, wall);
     by_wall[key].push_back(&rim);
     wall_faces.try_emplace(key, wall);
@@ -88,18 +87,37 @@ std::vector<int> Extractor::bores(SideRegionFinder& finder, std::vector<Rim>& ri
 }
 
 // The bore's axis from its wall: the direction all wall normals are square to (the smallest
-// eigenvector of their scatter), from hundreds of faces rather than one noisy rim's plane.
-Vec3 Extractor::wall_axis(const Rim& rim, const std::vector<int>& wall) const {
+// eigenvector of their scatter), from hundreds of faces rather than one noisy rim's plane. Its
+// covariance is the eigenvector's first-order perturbation, facet by facet (a sandwich estimate):
+// each facet's normal off square to the axis (n·a) pulls the axis toward eₖ by (n·a)(n·eₖ)/(λₖ − λ₀).
+// Facets are taken as independent; neighbours' noise tilts them opposite ways, so that overstates it.
+// With too few wall facets the rim circle's own plane is kept, its scatter over its radius the error.
+void Extractor::fit_wall_axis(Rim& rim, const std::vector<int>& wall) const {
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  int used = 0;
+  std::vector<int> used;
   for (int f : wall) {
     const Vec3 n = faces_.normals.row(f).transpose();
     if (std::abs(n.dot(rim.axis)) > 0.5) continue;  // not wall
     scatter += faces_.areas[f] * n * n.transpose();
-    ++used;
+    used.push_back(f);
   }
-  if (used < 8) return rim.axis;
-  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+  const double fallback = rim.circle.rms_mm / rim.circle.radius;
+  rim.axis_covariance = fallback * fallback * (Eigen::Matrix3d::Identity() - rim.axis * rim.axis.transpose());
+  if (used.size() < 8) return;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+  const Vec3 axis = eigen.eigenvectors().col(0);
+  const Eigen::Vector3d lambda = eigen.eigenvalues();
+  if (!(lambda(1) - lambda(0) > 0)) return;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (int f : used) {
+    const Vec3 n = faces_.normals.row(f).transpose();
+    Vec3 pull = Vec3::Zero();
+    for (int k = 1; k < 3; ++k) pull += eigen.eigenvectors().col(k) * n.dot(eigen.eigenvectors().col(k)) / (lambda(k) - lambda(0));
+    pull *= faces_.areas[f] * n.dot(axis);
+    covariance += pull * pull.transpose();
+  }
+  rim.axis = axis.dot(rim.axis) >= 0 ? axis : Vec3(-axis);
+  rim.axis_covariance = covariance;
 }
 
 // The wall's mean tilt along the axis over the whole bore: the folds along its two rims lean
@@ -135,11 +153,11 @@ void Extractor::wall_normals_from_bore(const Rim& rim, std::vector<CurveSample>&
   const double draft = rim.draft;
   for (CurveSample& s : samples) {
     SideNormal& wall = rim.wall_is_left ? s.left : s.right;
-    const Vec3 fitted = (radial(s.at.position) + draft * rim.axis).normalized();
-    // Its turn about the rim's tangent is the draft's error plus the axis's tilt in that plane; the
-    // rim circle's scatter over its radius stands in for the latter (the axis comes from the whole
-    // wall, so it is no worse than that).
-    wall.uncertainty_rad = std::hypot(rim.circle.rms_mm / rim.circle.radius, rim.draft_error);
+    const Vec3 to_axis = radial(s.at.position);
+    const Vec3 fitted = (to_axis + draft * rim.axis).normalized();
+    // Its turn about the rim's tangent is the draft's error plus the axis's tilt toward the point.
+    const double tilt = std::sqrt(std::max(0.0, to_axis.dot(rim.axis_covariance * to_axis)));
+    wall.uncertainty_rad = std::hypot(tilt, rim.draft_error);
     wall.normal = fitted;
   }
 }

@@ -31,6 +31,9 @@ struct Rim {
   bool wall_is_left;
   int wall_face;
   Vec3 axis;         // out of the material at this rim
+  // Of the axis's tilt, from the wall facets' scatter about it: what a wall normal's turn about the
+  // rim's tangent takes from the axis (a centre's error turns it about the axis, which moves no window).
+  Eigen::Matrix3d axis_covariance = Eigen::Matrix3d::Zero();
   double draft = 0;  // tan of the wall's tilt toward the axis direction, over the whole wall
   double draft_error = 0;  // its standard error, and the mean dropped when within 3 of them
 };
@@ -59,8 +62,8 @@ class Extractor {
   SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn, double along);
   double along_edge(const std::vector<Vec3>& points, const PolylineSample& s) const;
   // The vertex noise a clean mesh's side normals carry over `region` (its facets' residuals are the
-  // tessellation's); none on a noisy mesh, whose residuals are the noise.
-  std::optional<double> clean_sigma(const std::vector<int>& region) const;
+  // tessellation's), and the whole mesh's; none on a noisy mesh, whose residuals are the noise.
+  std::optional<CleanNoise> clean_noise(const std::vector<int>& region) const;
   double across_edge(int seed, const PolylineSample& s) const;
   Vec3 edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double along) const;
   void emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole);
@@ -69,7 +72,7 @@ class Extractor {
   // bore_detection.cpp
   std::optional<Rim> bore_rim(int curve, const std::vector<Vec3>& points, const std::vector<CurveSample>& samples);
   std::vector<int> bores(SideRegionFinder& finder, std::vector<Rim>& rims);
-  Vec3 wall_axis(const Rim& rim, const std::vector<int>& wall) const;
+  void fit_wall_axis(Rim& rim, const std::vector<int>& wall) const;
   void measure_wall_draft(Rim& rim, const std::vector<int>& wall) const;
   void wall_normals_from_bore(const Rim& rim, std::vector<CurveSample>& samples);
 

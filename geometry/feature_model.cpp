@@ -178,21 +178,21 @@ SideNormal Extractor::side(SideRegionFinder& finder, int seed, const PolylineSam
   // decimated patch), more of the side steadies the fit. The neighbourhood that states the smallest
   // uncertainty is taken (Lepski's rule, which keeps a narrower fit that disagrees with a wider one,
   // kept a decimated rim's worst facets: their own spread understates them).
-  SideNormal best = side_normal(mesh_, faces_, region, s.position, s.direction, turn, clean_sigma(region));
+  SideNormal best = side_normal(mesh_, faces_, region, s.position, s.direction, turn, clean_noise(region));
   for (double widen : {2.0, 4.0}) {
     if (best.uncertainty_rad < 1e-3) break;  // 0.06°: no wider region would do better where it matters
     const std::vector<int>& wider = finder.region(seed, s.position, s.direction, widen * radius, widen * along);
     if (wider.size() <= region.size()) break;  // the side ends here
-    SideNormal candidate = side_normal(mesh_, faces_, wider, s.position, s.direction, turn, clean_sigma(wider));
+    SideNormal candidate = side_normal(mesh_, faces_, wider, s.position, s.direction, turn, clean_noise(wider));
     if (candidate.uncertainty_rad < best.uncertainty_rad) best = candidate;
     region = wider;
   }
   return best;
 }
 
-// The mesh's vertex noise, or the RMS distance of this region's own vertices from their local fit
+// The mesh's vertex noise, and the RMS distance of this region's own vertices from their local fit
 // where that is larger (a decimated patch whose vertices were moved off the surface).
-std::optional<double> Extractor::clean_sigma(const std::vector<int>& region) const {
+std::optional<CleanNoise> Extractor::clean_noise(const std::vector<int>& region) const {
   if (model_.features.noisy) return std::nullopt;
   const auto& residual = model_.features.noise.vertex_residual_mm;
   double sum = 0;
@@ -204,7 +204,8 @@ std::optional<double> Extractor::clean_sigma(const std::vector<int>& region) con
       sum += static_cast<double>(r) * r, ++count;
     }
   const double local = count ? std::sqrt(sum / count) : 0;
-  return std::max(model_.features.noise.sigma_mm, local);
+  const double sigma = model_.features.noise.sigma_mm;
+  return CleanNoise{std::max(sigma, local), sigma};
 }
 
 void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole) {
@@ -270,7 +271,7 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
     const double along = along_edge(points, s);
     const std::vector<int>& region = finder.region(face, s.position, s.direction, across_edge(face, s), along);
     const SideNormal side =
-        side_normal(mesh_, faces_, region, s.position, s.direction, edge_turn(points, true, s, along), clean_sigma(region));
+        side_normal(mesh_, faces_, region, s.position, s.direction, edge_turn(points, true, s, along), clean_noise(region));
     EdgePoint p;
     p.id = static_cast<int>(model_.points.size());
     p.position = s.position;

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <numbers>
+#include <unordered_set>
 #include <utility>
 
 namespace cmm::geometry {
@@ -263,12 +265,19 @@ double tessellation_uncertainty(const SideNormal& fitted, const Vec3& seed_norma
   return (0.625 * std::abs(across) + along * along / 2) / 3.5;
 }
 
-SideNormal fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+// The fitted normal, and how far the fitted field turns, at the edge facet's own place, from that facet
+// about the edge: a field that misses the very facet touching the edge does not describe the side there.
+struct FittedSide {
+  SideNormal side;
+  double edge_facet_misfit_rad = 0;
+};
+
+FittedSide fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
                               const Vec3& point, const Vec3& tangent, const Vec3& turn,
                               std::optional<double> clean_sigma_mm);
 
 // The turn about the edge from the facet touching it (region.front()) to the facets of the next two rows:
-// how far that facet's normal may be from the side's at the edge.
+// whether the side is a plane at the edge.
 double chord_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
                    const Vec3& point, const Vec3& tangent) {
   const int seed = region.front();
@@ -289,17 +298,57 @@ double chord_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const st
   return chord;
 }
 
+// The turn from the plane piece touching the edge (the facets joined to region.front() across shared
+// edges with its very normal: a CAD quad, a chamfer strip) to the facets bordering that piece, whole (a
+// uniform mesh's neighbours sit beside the facet as often as beyond it, and turn about the edge little):
+// the facet's chord angle. The piece is exact somewhere inside it, so at the edge its normal is off by
+// less than that; a fit that corrects it by more follows the side beyond the next row.
+double next_row_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region) {
+  const int seed = region.front();
+  const Vec3 normal = faces.normals.row(seed).transpose();
+  const auto vertices = static_cast<std::int64_t>(mesh.vertices.rows());
+  std::vector<std::pair<std::int64_t, int>> edge_faces;  // (edge, face), sorted by edge
+  edge_faces.reserve(3 * region.size());
+  auto edge_of = [&](int f, int k) {
+    const int a = mesh.faces(f, k), b = mesh.faces(f, (k + 1) % 3);
+    return std::min(a, b) * vertices + std::max(a, b);
+  };
+  for (int f : region)
+    for (int k = 0; k < 3; ++k) edge_faces.emplace_back(edge_of(f, k), f);
+  std::sort(edge_faces.begin(), edge_faces.end());
+  std::vector<int> piece = {seed}, border;
+  std::unordered_set<int> seen = {seed};
+  for (std::size_t i = 0; i < piece.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t edge = edge_of(piece[i], k);
+      for (auto it = std::lower_bound(edge_faces.begin(), edge_faces.end(), std::pair{edge, -1});
+           it != edge_faces.end() && it->first == edge; ++it) {
+        if (!seen.insert(it->second).second) continue;
+        const bool coplanar = faces.normals.row(it->second).dot(normal.transpose()) > 1 - 1e-12;
+        (coplanar ? piece : border).push_back(it->second);
+      }
+    }
+  double turn = 0;
+  for (int g : border) turn = std::max(turn, std::acos(std::clamp(faces.normals.row(g).dot(normal.transpose()), -1.0, 1.0)));
+  return turn;
+}
+
 }  // namespace
 
 SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
-                       const Vec3& point, const Vec3& tangent, const Vec3& turn, std::optional<double> clean_sigma_mm) {
-  SideNormal result = fitted_side_normal(mesh, faces, region, point, tangent, turn, clean_sigma_mm);
+                       const Vec3& point, const Vec3& tangent, const Vec3& turn, std::optional<CleanNoise> clean) {
+  std::optional<double> clean_sigma_mm;
+  if (clean) clean_sigma_mm = clean->region_sigma_mm;
+  const FittedSide fitted = fitted_side_normal(mesh, faces, region, point, tangent, turn, clean_sigma_mm);
+  SideNormal result = fitted.side;
   if (!clean_sigma_mm || region.empty() || result.normal.squaredNorm() == 0) return result;
-  // Where the vertices lie on the surface (within 5 µm: a facet of 1 mm is then exact to 0.3°), the facet
-  // touching the edge carries the side to within its chord angle. A fit that moves the normal farther
-  // than that follows something the facets at the edge do not show (a blend beyond them, a blade's
-  // rounded nose): the facet is kept then, with half that chord angle as its error. A decimated patch's
-  // facets are not exact, and there the fit stands.
+  // Where the mesh's vertices lie on its surface (within 5 µm: a facet of 1 mm is then exact to 0.3°),
+  // the plane piece touching the edge carries the side to within its chord angle: the turn to the facets
+  // bordering it (and no more than the turn over the next two rows). A fit that moves the normal farther
+  // than that, or whose field misses the very facet at the edge by over half what it moves, follows
+  // something the facets at the edge do not show (a blend beyond them, a blade's rounded nose): the facet
+  // is kept then, with half that chord angle as its error. A decimated mesh's facets are not exact
+  // (its vertices were moved), and there the fit stands.
   const Vec3 seed = faces.normals.row(region.front()).transpose();
   const double chord = chord_angle(mesh, faces, region, point, tangent);
   const double correction = std::abs(std::asin(std::clamp(result.normal.dot(tangent.cross(seed)), -1.0, 1.0)));
@@ -307,9 +356,12 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   // Facets coplanar with the seed for two rows: the side is a plane at the edge, and the facet is exact
   // there whatever a wider fit says of the blend beyond.
   const bool planar = chord < 1e-6;
-  if ((planar || *clean_sigma_mm < 0.005) && correction > chord + slack) {
+  const bool exact_facets = planar || clean->mesh_sigma_mm < 0.005;
+  const double bound = exact_facets ? std::min(chord, next_row_angle(mesh, faces, region)) : chord;
+  const bool misses_edge_facet = fitted.edge_facet_misfit_rad > std::max(slack, correction / 2);
+  if (exact_facets && (correction > bound + slack || misses_edge_facet)) {
     result.normal = seed;
-    result.uncertainty_rad = std::hypot(result.uncertainty_rad, (chord / 2 + slack) / 3.5);
+    result.uncertainty_rad = std::hypot(result.uncertainty_rad, (bound / 2 + slack) / 3.5);
     return result;
   }
   result.uncertainty_rad = std::hypot(result.uncertainty_rad, tessellation_uncertainty(result, seed, tangent));
@@ -318,7 +370,14 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
 
 namespace {
 
-SideNormal fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+double misfit_at(const Fit& fit, const Sample& sample, const Vec3& tangent) {
+  const Vec3 predicted = fit.coefficients.transpose() * sample.x;
+  if (predicted.squaredNorm() == 0) return 0;
+  const Vec3 in_plane = tangent.cross(predicted.normalized());
+  return std::abs(std::asin(std::clamp(sample.normal.dot(in_plane), -1.0, 1.0)));
+}
+
+FittedSide fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
                               const Vec3& point, const Vec3& tangent, const Vec3& turn,
                               std::optional<double> clean_sigma_mm) {
   SideNormal result;
@@ -359,7 +418,7 @@ SideNormal fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& face
     result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent, clean_sigma_mm);
     if (clean_sigma_mm && plain.normal.squaredNorm() > 0)
       result.uncertainty_rad = std::max(result.uncertainty_rad, jackknife_uncertainty(samples, used, plain, tangent, min_count));
-    return result;
+    return {result, samples.empty() ? 0.0 : misfit_at(plain, samples.front(), tangent)};
   }
 
   // A rim is taken as a circle of radius 1/|turn| about `axis`: both sides turn about it, exactly so
@@ -380,7 +439,7 @@ SideNormal fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& face
   const Fit fitted = robust_fit(turned, turned_used, min_count);
   if (fitted.normal.squaredNorm() == 0) {
     result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent, clean_sigma_mm);
-    return result;
+    return {result, misfit_at(plain, samples.front(), tangent)};
   }
   const Vec3 across = fitted.normal.normalized();
   result.normal = (across - across.dot(tangent) * tangent + result.normal.dot(tangent) * tangent).normalized();
@@ -389,7 +448,7 @@ SideNormal fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& face
     result.uncertainty_rad = std::max(result.uncertainty_rad, jackknife_uncertainty(turned, turned_used, fitted, tangent, min_count));
   result.face_count = static_cast<int>(std::count(turned_used.begin(), turned_used.end(), 1));
   result.facet_spread_rad = std::sqrt(fitted.spread_squared);  // about the field the turn left
-  return result;
+  return {result, misfit_at(fitted, turned.front(), tangent)};
 }
 
 }  // namespace

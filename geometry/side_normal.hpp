@@ -57,16 +57,25 @@ class SideRegionFinder {
 // an exact mesh. The normal's component along the edge stays the plain fit's.
 //
 // The uncertainty propagates the vertex noise through the fit. On a noisy mesh the noise is estimated
-// from the facets' residuals about the field. On a clean one (`clean_sigma_mm` given: the mesh's
-// measured vertex noise) the residuals are the tessellation's, not noise: the noise given is used, and
+// from the facets' residuals about the field. On a clean one (`clean` given: the measured vertex
+// noise) the residuals are the tessellation's, not noise: the region's noise figure is used, and
 // the facets' chord angle is added, sized so that a window's margin is 5/8 of how far the fit moved the
 // normal from the facet touching the edge (region.front(), the seed): nothing on a plane, where the two
 // agree; on a curved side the fit's correction bounds what is left of the chord error. Where the fit
-// moves the normal farther than the edge facet's chord angle (the turn to the next two rows) on a side
-// that is planar there or whose vertices lie on the surface, it is following a blend beyond the edge,
-// and the edge facet is kept with half its chord angle as error.
+// moves the normal farther than the edge facet's chord angle (the turn to the facets bordering its plane
+// piece, at most that over the next two rows), or its field misses the edge facet itself, on a side that
+// is planar there or on a mesh whose vertices lie on the surface, it is following a blend beyond the
+// edge, and the edge facet is kept with half its chord angle as error.
+// What a clean mesh's noise estimate says near a side: the figure for this region (the mesh's vertex
+// noise, or its own vertices' RMS off their local fit where that is larger: a decimated patch, a blend
+// the local quadric does not follow) and the whole mesh's (whether its vertices lie on its surface).
+struct CleanNoise {
+  double region_sigma_mm = 0;
+  double mesh_sigma_mm = 0;
+};
+
 SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
                        const Vec3& point, const Vec3& tangent, const Vec3& turn = Vec3::Zero(),
-                       std::optional<double> clean_sigma_mm = std::nullopt);
+                       std::optional<CleanNoise> clean = std::nullopt);
 
 }  // namespace cmm::geometry

@@ -103,10 +103,11 @@ TEST_P(RealMesh, SideNormalsAgreeWithTheFacetsAtTheEdge) {
               100.0 * probeable / std::max(1, sharp), checked, worst / deg, beyond_half_degree, agreeing);
   for (const auto& [reason, count] : reasons) std::printf("    %5d x %s\n", count, reason.c_str());
   EXPECT_GT(checked, 50);
-  // The aim (issue 15) is every point; today 83 % of fandisk's and 84 % of blade's agree, the rest by
-  // up to 3.5° (fandisk's blends next to planar faces) and 18° (blade's thin rounded nose). This holds
-  // that ground while the rest stays open.
-  EXPECT_GE(agreeing, 0.8 * checked);
+  // The aim (issue 15) is every point; today all of blade's agree and 95.7 % of fandisk's. The rest (up
+  // to 4.7°, beside its blends) are where the fit moves the normal by less than the turn to the facets
+  // bordering the edge facet, which the extractor takes whole while this test counts its part about the
+  // edge only. This holds that ground while the rest stays open.
+  EXPECT_GE(agreeing, (GetParam() == "blade.ply" ? 1.0 : 0.95) * checked);
   EXPECT_LT(worst, 20 * deg);
 }
 
