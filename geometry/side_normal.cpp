@@ -303,9 +303,13 @@ double chord_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const st
 // uniform mesh's neighbours sit beside the facet as often as beyond it, and turn about the edge little):
 // the facet's chord angle. The piece is exact somewhere inside it, so at the edge its normal is off by
 // less than that; a fit that corrects it by more follows the side beyond the next row.
-double next_row_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region) {
+double next_row_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+                      const Vec3& point, const Vec3& tangent) {
   const int seed = region.front();
   const Vec3 normal = faces.normals.row(seed).transpose();
+  // Only the piece beside the point: a strip along a curved edge turns with it farther along.
+  double reach = 0;
+  for (int k = 0; k < 3; ++k) reach = std::max(reach, std::abs((vertex(mesh, mesh.faces(seed, k)) - point).dot(tangent)));
   const auto vertices = static_cast<std::int64_t>(mesh.vertices.rows());
   std::vector<std::pair<std::int64_t, int>> edge_faces;  // (edge, face), sorted by edge
   edge_faces.reserve(3 * region.size());
@@ -324,7 +328,8 @@ double next_row_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const
       for (auto it = std::lower_bound(edge_faces.begin(), edge_faces.end(), std::pair{edge, -1});
            it != edge_faces.end() && it->first == edge; ++it) {
         if (!seen.insert(it->second).second) continue;
-        const bool coplanar = faces.normals.row(it->second).dot(normal.transpose()) > 1 - 1e-12;
+        const bool coplanar = faces.normals.row(it->second).dot(normal.transpose()) > 1 - 1e-12 &&
+                              std::abs((face_centroid(mesh, it->second) - point).dot(tangent)) <= reach;
         (coplanar ? piece : border).push_back(it->second);
       }
     }
@@ -357,7 +362,7 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   // there whatever a wider fit says of the blend beyond.
   const bool planar = chord < 1e-6;
   const bool exact_facets = planar || clean->mesh_sigma_mm < 0.005;
-  const double bound = exact_facets ? std::min(chord, next_row_angle(mesh, faces, region)) : chord;
+  const double bound = exact_facets ? std::min(chord, next_row_angle(mesh, faces, region, point, tangent)) : chord;
   const bool misses_edge_facet = fitted.edge_facet_misfit_rad > std::max(slack, correction / 2);
   if (exact_facets && (correction > bound + slack || misses_edge_facet)) {
     result.normal = seed;

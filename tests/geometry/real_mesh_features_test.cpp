@@ -74,18 +74,22 @@ TEST_P(RealMesh, SideNormalsAgreeWithTheFacetsAtTheEdge) {
     const bool straight = p.n_up.dot(f0) + p.n_down->dot(f1) >= p.n_up.dot(f1) + p.n_down->dot(f0);
     const double up = turn_about(p.tangent, p.n_up, straight ? f0 : f1), down = turn_about(p.tangent, *p.n_down, straight ? f1 : f0);
     // A facet on a curved side is exact somewhere inside it: the normal at the edge may differ from it
-    // by up to its chord angle, the turn to its neighbours across its other two edges.
+    // by up to its chord angle, the angle to its neighbours across its other two edges. All of that angle
+    // counts, not only its part about the edge: on a uniform mesh a facet's neighbours lie beside it as
+    // often as beyond it (a Ø50 sphere cut into 1 mm facets turns 0.84° from the facet at the equator to
+    // the edge, while its neighbours turn 0.57° about it).
     auto chord = [&](int f) {
       double most = 0;
       for (int k = 0; k < 3; ++k) {
         const int e = adjacency.face_edges(f, k), g = adjacency.other_face(e, f);
         if (e == nearest || g < 0 || model.features.is_feature[e]) continue;
-        most = std::max(most, turn_about(p.tangent, faces.normals.row(g).transpose(), faces.normals.row(f).transpose()));
+        most = std::max(most, std::acos(std::clamp(faces.normals.row(g).dot(faces.normals.row(f)), -1.0, 1.0)));
       }
       return most;
     };
-    const double up_allowed = std::max(0.5 * deg, chord(straight ? face0 : face1)),
-                 down_allowed = std::max(0.5 * deg, chord(straight ? face1 : face0));
+    // The 0.1° the extractor grants a fit beyond the chord angle before it keeps the facet instead.
+    const double up_allowed = std::max(0.5 * deg, chord(straight ? face0 : face1) + 0.1 * deg),
+                 down_allowed = std::max(0.5 * deg, chord(straight ? face1 : face0) + 0.1 * deg);
     worst = std::max({worst, up, down});
     beyond_half_degree += std::max(up, down) > 0.5 * deg;
     ++checked;
@@ -103,11 +107,11 @@ TEST_P(RealMesh, SideNormalsAgreeWithTheFacetsAtTheEdge) {
               100.0 * probeable / std::max(1, sharp), checked, worst / deg, beyond_half_degree, agreeing);
   for (const auto& [reason, count] : reasons) std::printf("    %5d x %s\n", count, reason.c_str());
   EXPECT_GT(checked, 50);
-  // The aim (issue 15) is every point; today all of blade's agree and 95.7 % of fandisk's. The rest (up
-  // to 4.7°, beside its blends) are where the fit moves the normal by less than the turn to the facets
-  // bordering the edge facet, which the extractor takes whole while this test counts its part about the
-  // edge only. This holds that ground while the rest stays open.
-  EXPECT_GE(agreeing, (GetParam() == "blade.ply" ? 1.0 : 0.95) * checked);
+  // The aim (issue 15) is every point; today all of blade's agree and 478 of fandisk's 483. The other
+  // five lie beside one blend, where the facet at the edge is one of a coplanar pair whose other half
+  // borders facets turned 2-3°: the extractor grants a fit up to that turn and the fit moves ~1°, while
+  // this test counts the edge facet's own neighbours only. This holds that ground.
+  EXPECT_GE(agreeing, (GetParam() == "blade.ply" ? 1.0 : 0.985) * checked);
   EXPECT_LT(worst, 20 * deg);
 }
 
