@@ -2,6 +2,7 @@
 // with the outward normals of its two sides; the fields are those of the plan JSON in DESIGN.md.
 #pragma once
 
+#include <algorithm>
 #include <optional>
 #include <string>
 
@@ -31,6 +32,9 @@ struct EdgePoint {
   // How far the mesh's crease may lie from the true edge here on its own (a coarse fan's chord is
   // inside the circle): added to the plan's δ for this point.
   double mesh_deviation_mm = 0;
+  // Standard error of `position` from the mesh's vertex noise, after the crease's smoothing: a point on a
+  // short closed curve or at an open curve's end is smoothed less. Its δ is at least 3 of these.
+  double position_sigma_mm = 0;
   bool probeable = true;
   std::string reason;  // why not probeable
   int curve = -1;      // feature curve or boundary loop it was sampled on
@@ -39,5 +43,11 @@ struct EdgePoint {
 
 // Orders two side normals by the n_up convention; true when `a` is the up side.
 bool is_up_side(const Vec3& a, const Vec3& b);
+
+// The δ a point's window and search are made for: the plan's, or 3 standard errors of the point's own
+// position where that is more, and the mesh's own distance from the edge on top.
+inline double delta_at(const EdgePoint& p, double plan_delta) {
+  return std::max(plan_delta, 3 * p.position_sigma_mm) + p.mesh_deviation_mm;
+}
 
 }  // namespace cmm::geometry

@@ -22,6 +22,7 @@ struct CurveSample {
   SideNormal left, right;
   int left_face = -1, right_face = -1;
   ChordDeviation chord;  // of the crease segment the sample lies on
+  double position_sigma_mm = 0;  // the vertex noise left on its position after the crease's smoothing
 };
 
 // A closed feature curve found to be the rim of a bore.
@@ -55,12 +56,14 @@ class Extractor {
 
  private:
   // feature_model.cpp
-  std::vector<CurveSample> sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points);
+  std::vector<CurveSample> sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points,
+                                        const std::vector<double>& noise_gain);
+  double position_sigma(const std::vector<double>& noise_gain, int segment) const;
   void check_point_count() const;
-  int smoothing_window(std::size_t vertices, bool closed) const;
+  std::vector<Vec3> smooth_curve(const std::vector<Vec3>& raw, bool closed, double length, std::vector<double>& noise_gain) const;
   bool two_distinct_sides(const std::vector<CurveSample>& samples) const;
   SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn, double along);
-  double along_edge(const std::vector<Vec3>& points, const PolylineSample& s) const;
+  double along_edge(const std::vector<Vec3>& points, bool closed, const PolylineSample& s) const;
   // The vertex noise a clean mesh's side normals carry over `region` (its facets' residuals are the
   // tessellation's), and the whole mesh's; none on a noisy mesh, whose residuals are the noise.
   std::optional<CleanNoise> clean_noise(const std::vector<int>& region) const;
@@ -77,6 +80,8 @@ class Extractor {
   void wall_normals_from_bore(const Rim& rim, std::vector<CurveSample>& samples);
 
   static constexpr std::size_t min_region_faces = 6;
+  // Up to this turn × reach (rad) edge_turn takes a rim's turn out of a side's facets.
+  static constexpr double max_turn_reach = 0.5;
   const TriangleMesh& mesh_;
   const FeatureModelOptions& options_;
   EdgeAdjacency adjacency_;

@@ -69,8 +69,9 @@ FeatureModel Extractor::run() {
   for (std::size_t c = 0; c < curves.size(); ++c) {
     options_.cancel.throw_if_requested("the feature curves");
     const std::vector<Vec3> raw = positions(mesh_, curves[c].vertices);
-    const std::vector<Vec3> points = smooth_polyline(raw, curves[c].closed, smoothing_window(raw.size(), curves[c].closed));
-    samples[c] = sample_curve(finder, curves[c], points);
+    std::vector<double> noise_gain;
+    const std::vector<Vec3> points = smooth_curve(raw, curves[c].closed, curves[c].length, noise_gain);
+    samples[c] = sample_curve(finder, curves[c], points, noise_gain);
     if (!two_distinct_sides(samples[c])) {
       samples[c].clear();
       ++model_.rejected_curves;
@@ -88,10 +89,24 @@ FeatureModel Extractor::run() {
     options_.cancel.throw_if_requested("the boundary loops");
     emit_loop_points(finder, static_cast<int>(l));
   }
+  if (!model_.points.empty()) {
+    std::vector<double> sigmas;
+    for (const EdgePoint& p : model_.points) sigmas.push_back(p.position_sigma_mm);
+    std::nth_element(sigmas.begin(), sigmas.begin() + static_cast<long>(sigmas.size() / 2), sigmas.end());
+    model_.point_sigma_mm = sigmas[sigmas.size() / 2];
+  }
   return std::move(model_);
 }
 
-std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points) {
+// A sample between two smoothed vertices is as uncertain as the worse of them.
+double Extractor::position_sigma(const std::vector<double>& noise_gain, int segment) const {
+  const auto i = static_cast<std::size_t>(segment);
+  const double gain = std::max(noise_gain[i], noise_gain[(i + 1) % noise_gain.size()]);
+  return model_.features.noise.sigma_mm * std::sqrt(gain);
+}
+
+std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points,
+                                                 const std::vector<double>& noise_gain) {
   std::vector<CurveSample> result;
   for (const PolylineSample& s : sample_polyline(points, curve.closed, options_.spacing)) {
     CurveSample sample{s, {}, {}, -1, -1, {}};
@@ -102,21 +117,36 @@ std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const
       (mesh_.faces(h / 3, h % 3) == from ? sample.left_face : sample.right_face) = h / 3;
     }
     if (sample.left_face < 0 || sample.right_face < 0) continue;  // inconsistent orientation here
-    const double along = along_edge(points, s);
+    const double along = along_edge(points, curve.closed, s);
     const Vec3 turn = edge_turn(points, curve.closed, s, along);
     sample.left = side(finder, sample.left_face, s, turn, along);
     sample.right = side(finder, sample.right_face, s, turn, along);
     sample.chord = chord_deviation(points, curve.closed, s.segment);
+    sample.position_sigma_mm = position_sigma(noise_gain, s.segment);
     result.push_back(sample);
   }
   return result;
 }
 
-// Noisy meshes smooth ±3 vertices; a small closed curve less, so the window never spans more than
-// about a twelfth of a loop (a Ø6 rim has 19 vertices: 7 would span 130° of it).
-int Extractor::smoothing_window(std::size_t vertices, bool closed) const {
-  if (half_window_ == 0) return 0;
-  return closed ? std::min(half_window_, static_cast<int>(vertices / 12)) : half_window_;
+// A noisy mesh's creases are smoothed over ±3 vertices by arc length, a closed one over at most a twelfth
+// of its vertices (a Ø6 rim has 19: 7 by arc length would cut its corner). A rim (a closed circular
+// curve) is smoothed by angle instead, on its radius and height, over as far as the side normals reach
+// along an edge (75 σ), at most a quarter of the way round to either side. An exact mesh's are kept.
+std::vector<Vec3> Extractor::smooth_curve(const std::vector<Vec3>& raw, bool closed, double length,
+                                          std::vector<double>& noise_gain) const {
+  const int vertices = static_cast<int>(raw.size());
+  if (half_window_ == 0 || vertices == 0) {
+    noise_gain.assign(raw.size(), 1.0);
+    return raw;
+  }
+  if (closed) {
+    const Circle3 circle = fit_circle(raw);
+    if (is_circle(circle, length, options_.circle_tolerance)) {
+      const auto reach = static_cast<int>(std::lround(noise_along_ * vertices / length));
+      return smooth_rim(raw, circle, std::min(std::max(reach, half_window_), vertices / 4), &noise_gain);
+    }
+  }
+  return smooth_polyline(raw, closed, closed ? std::min(half_window_, vertices / 12) : half_window_, &noise_gain);
 }
 
 // A crease separates two sides that face different ways. Where the neighbourhood normals of the
@@ -135,16 +165,22 @@ bool Extractor::two_distinct_sides(const std::vector<CurveSample>& samples) cons
 // by more than the turn's own second-order effect: there the linear fit alone is better.
 Vec3 Extractor::edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double along) const {
   const Vec3 turn = polyline_turn(points, closed, s, 2 * along);
-  return turn.norm() * along <= 0.5 ? turn : Vec3::Zero();
+  return turn.norm() * along <= max_turn_reach ? turn : Vec3::Zero();
 }
 
-// How far along the edge a side's facets are taken, in mm: what the vertex noise asks for, but at
-// least the reference spacing and the crease segment the point lies on with half its neighbours'
-// reach, so the facets touching the edge here are always in.
-double Extractor::along_edge(const std::vector<Vec3>& points, const PolylineSample& s) const {
+// How far along the edge a side's facets are taken, in mm: what the vertex noise asks for, and twice that
+// where the edge is straight or turns slowly enough for edge_turn to take the turn out of the facets over
+// that reach (more facets, the same bias); but at least the reference spacing and the crease segment the
+// point lies on with half its neighbours' reach, so the facets touching the edge here are always in.
+double Extractor::along_edge(const std::vector<Vec3>& points, bool closed, const PolylineSample& s) const {
   const auto i = static_cast<std::size_t>(s.segment);
   const double segment = (points[(i + 1) % points.size()] - points[i]).norm();
-  return std::max({noise_along_, options_.spacing, 1.5 * segment});
+  double noise = noise_along_;
+  if (model_.features.noisy) {
+    const double turn = polyline_turn(points, closed, s, 4 * noise_along_).norm();
+    noise = std::max(noise, std::min(2 * noise_along_, turn > 0 ? 0.9 * max_turn_reach / turn : 2 * noise_along_));
+  }
+  return std::max({noise, options_.spacing, 1.5 * segment});
 }
 
 // How far across the edge: what the noise asks for, but at least 2.5 spacings and 2.5 times the depth
@@ -230,6 +266,7 @@ void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& sam
     p.curve = curve;
     p.hole = hole;
     p.mesh_deviation_mm = s.chord.sagitta_mm;
+    p.position_sigma_mm = s.position_sigma_mm;
     // A facet of a fan is exact at its middle: at most half a chord's turn along the edge from the point,
     // which tilts its normal in the cross-section by up to (θ/2)²/2. A window's margin takes that off.
     const double fan = std::pow(s.chord.turn_rad / 2, 2) / 2 / 3.5;
@@ -251,7 +288,8 @@ void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& sam
 void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
   const BoundaryLoop& loop = model_.loops[loop_index];
   const std::vector<Vec3> raw = positions(mesh_, loop.vertices);
-  const std::vector<Vec3> points = smooth_polyline(raw, true, smoothing_window(raw.size(), true));
+  std::vector<double> noise_gain;
+  const std::vector<Vec3> points = smooth_curve(raw, true, loop.perimeter, noise_gain);
   std::optional<Hole> hole;
   if (loop.kind == LoopKind::hole) {
     const Circle3 circle = fit_circle(raw);
@@ -268,7 +306,7 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
   }
   for (const PolylineSample& s : sample_polyline(points, true, options_.spacing)) {
     const int face = loop.half_edges[s.segment] / 3;
-    const double along = along_edge(points, s);
+    const double along = along_edge(points, true, s);
     const std::vector<int>& region = finder.region(face, s.position, s.direction, across_edge(face, s), along);
     const SideNormal side =
         side_normal(mesh_, faces_, region, s.position, s.direction, edge_turn(points, true, s, along), clean_noise(region));
@@ -277,6 +315,7 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
     p.position = s.position;
     p.curve = loop_index;
     p.mesh_deviation_mm = chord_deviation(points, true, s.segment).sagitta_mm;
+    p.position_sigma_mm = position_sigma(noise_gain, s.segment);
     if (hole) {
       // The scan lost the wall: a bore wall is parallel to the axis and faces it.
       Vec3 to_axis = hole->centre - s.position;

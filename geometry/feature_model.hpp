@@ -24,7 +24,9 @@ struct FeatureModelOptions {
   // the side's own face. Never less than the facets touching the edge and the row beyond them (so
   // that a curved side's normal can be taken to the edge): on an exact mesh those alone are used.
   double neighbourhood_sigmas = 190.0;
-  // ...and no farther than this along the edge, where a rim's turning normals would foreshorten.
+  // ...and no farther than this along the edge, where a rim's turning normals would foreshorten (twice
+  // this where the edge's turn can be taken out of the facets over that reach). A rim is smoothed over
+  // as long a stretch.
   double neighbourhood_along_sigmas = 75.0;
   // ...and within this turn of the normal where it starts, so it cannot wrap around a small bore.
   double neighbourhood_max_turn_deg = 30.0;
@@ -53,8 +55,10 @@ struct FeatureModel {
   std::vector<EdgePoint> points;
   std::vector<Hole> holes;
   int rejected_curves = 0;  // feature curves whose two sides turned out to face the same way
-  // Standard error of a reference point's position from the vertex noise: the noise σ, reduced by the
-  // smoothing of a noisy mesh's creases (a quadratic fit over 7 vertices keeps 1/3 of the variance).
+  // Standard error of a typical reference point's position from the vertex noise: the median over the
+  // points of EdgePoint::position_sigma_mm (the noise σ, reduced by the smoothing of a noisy mesh's
+  // creases: a quadratic fit over 7 vertices keeps 1/3 of the variance). A plan's δ is raised to 3 of
+  // it; a point smoothed less (a small rim, an open curve's end) raises its own.
   double point_sigma_mm = 0;
 };
 

@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <numbers>
@@ -15,33 +16,78 @@ constexpr double max_arc_turn = std::numbers::pi / 3;  // a hexagon still sample
 
 }  // namespace
 
-std::vector<Vec3> smooth_polyline(const std::vector<Vec3>& points, bool closed, int half_window) {
-  const int n = static_cast<int>(points.size());
+namespace {
+
+// One local quadratic fit per vertex over ±half_window neighbours (open curves keep the window inside the
+// curve; closed ones wrap), in the parameter `step(a, b)` puts between consecutive vertices a and b. Returns
+// the fits' constant terms, a row per row of `values`.
+Eigen::MatrixXd local_quadratic(const Eigen::MatrixXd& values, bool closed, int half_window,
+                                const std::function<double(int, int)>& step, std::vector<double>* noise_gain) {
+  const auto n = static_cast<int>(values.rows());
   const int window = 2 * half_window + 1;
-  if (half_window <= 0 || n < window) return points;
-  std::vector<Vec3> smoothed(n);
+  if (noise_gain) noise_gain->assign(static_cast<std::size_t>(n), 1.0);
+  if (half_window <= 0 || n < window) return values;
+  Eigen::MatrixXd smoothed(n, values.cols());
   for (int i = 0; i < n; ++i) {
-    // Open curves keep the window inside the curve; closed ones wrap.
     int first = i - half_window;
     if (!closed) first = std::clamp(first, 0, n - window);
     Eigen::MatrixXd design(window, 3);
-    Eigen::MatrixXd values(window, 3);
-    double s = 0, s_at_i = 0;
+    Eigen::MatrixXd local(window, values.cols());
+    double t = 0, t_at_i = 0;
     for (int j = 0; j < window; ++j) {
       const int index = ((first + j) % n + n) % n;
-      if (j > 0) s += (points[index] - points[((first + j - 1) % n + n) % n]).norm();
-      if (index == i) s_at_i = s;
-      design.row(j) << 1.0, s, s * s;
-      values.row(j) = points[index].transpose();
+      if (j > 0) t += step(((first + j - 1) % n + n) % n, index);
+      if (index == i) t_at_i = t;
+      design(j, 1) = t;
+      local.row(j) = values.row(index);
     }
     for (int j = 0; j < window; ++j) {  // centre the parameter for conditioning
-      const double t = design(j, 1) - s_at_i;
-      design.row(j) << 1.0, t, t * t;
+      const double u = design(j, 1) - t_at_i;
+      design.row(j) << 1.0, u, u * u;
     }
-    const Eigen::MatrixXd coefficients = design.colPivHouseholderQr().solve(values);
-    smoothed[i] = coefficients.row(0).transpose();
+    smoothed.row(i) = design.colPivHouseholderQr().solve(local).row(0);
+    // The smoothed vertex is the fit's constant term: its variance over a raw vertex's is ((XᵀX)⁻¹)₀₀.
+    if (noise_gain) (*noise_gain)[static_cast<std::size_t>(i)] = (design.transpose() * design).inverse()(0, 0);
   }
   return smoothed;
+}
+
+}  // namespace
+
+std::vector<Vec3> smooth_polyline(const std::vector<Vec3>& points, bool closed, int half_window,
+                                  std::vector<double>* noise_gain) {
+  Eigen::MatrixXd values(points.size(), 3);
+  for (std::size_t i = 0; i < points.size(); ++i) values.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  const auto distance = [&](int a, int b) { return (points[static_cast<std::size_t>(b)] - points[static_cast<std::size_t>(a)]).norm(); };
+  const Eigen::MatrixXd smoothed = local_quadratic(values, closed, half_window, distance, noise_gain);
+  std::vector<Vec3> result(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) result[i] = smoothed.row(static_cast<Eigen::Index>(i)).transpose();
+  return result;
+}
+
+std::vector<Vec3> smooth_rim(const std::vector<Vec3>& points, const Circle3& circle, int half_window,
+                             std::vector<double>* noise_gain) {
+  const Vec3 axis = circle.normal.normalized();
+  const Vec3 u = axis.unitOrthogonal(), v = axis.cross(u);
+  Eigen::MatrixXd values(points.size(), 2);  // radius and height about the circle
+  std::vector<double> angle(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3 offset = points[i] - circle.centre;
+    const double z = offset.dot(axis);
+    const Vec3 radial = offset - z * axis;
+    angle[i] = std::atan2(radial.dot(v), radial.dot(u));
+    values.row(static_cast<Eigen::Index>(i)) << radial.norm(), z;
+  }
+  const auto turn = [&](int a, int b) {
+    return std::abs(std::remainder(angle[static_cast<std::size_t>(b)] - angle[static_cast<std::size_t>(a)], 2 * std::numbers::pi));
+  };
+  const Eigen::MatrixXd smoothed = local_quadratic(values, true, half_window, turn, noise_gain);
+  std::vector<Vec3> result(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
+    result[i] = circle.centre + smoothed(row, 0) * (std::cos(angle[i]) * u + std::sin(angle[i]) * v) + smoothed(row, 1) * axis;
+  }
+  return result;
 }
 
 std::vector<PolylineSample> sample_polyline(const std::vector<Vec3>& points, bool closed, double spacing) {

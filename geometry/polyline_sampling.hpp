@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "geometry/circle_fit.hpp"
 #include "geometry/mesh.hpp"
 
 namespace cmm::geometry {
@@ -15,8 +16,18 @@ struct PolylineSample {
 };
 
 // Local quadratic (Savitzky–Golay) fit over ±half_window vertices by arc length: removes
-// vertex noise without shrinking circles, as a moving average would.
-std::vector<Vec3> smooth_polyline(const std::vector<Vec3>& points, bool closed, int half_window);
+// vertex noise without shrinking circles, as a moving average would. `noise_gain`, when given, gets
+// per vertex the variance of the smoothed position over a raw vertex's (1 where nothing is smoothed;
+// largest at an open curve's ends, where the fit reaches out to one side).
+std::vector<Vec3> smooth_polyline(const std::vector<Vec3>& points, bool closed, int half_window,
+                                  std::vector<double>* noise_gain = nullptr);
+
+// The same fit for a closed curve that is a circle (a rim), made on its radius and height about the
+// circle's axis by angle: a round rim keeps both constant, so a window as wide as the noise asks for
+// leaves no bias, where one by arc length cuts the corner of a small circle. Along the rim the
+// vertices stay where they are.
+std::vector<Vec3> smooth_rim(const std::vector<Vec3>& points, const Circle3& circle, int half_window,
+                             std::vector<double>* noise_gain = nullptr);
 
 // Samples at the centres of equal arcs no longer than `spacing`, so no sample sits on a corner
 // and every point of the curve is within spacing/2 of one. A closed polyline wraps around.

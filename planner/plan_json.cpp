@@ -95,6 +95,7 @@ json to_json(const geometry::EdgePoint& p) {
       {"normal_uncertainty_deg", {degrees(p.n_up_uncertainty_rad), degrees(p.n_down_uncertainty_rad)}},
       {"facet_spread_deg", {degrees(p.n_up_spread_rad), degrees(p.n_down_spread_rad)}},
       {"mesh_deviation_mm", p.mesh_deviation_mm},
+      {"position_sigma_mm", p.position_sigma_mm},
       {"probeable", p.probeable},
       {"reason", p.reason.empty() ? json(nullptr) : json(p.reason)},
       {"curve", p.curve},
@@ -181,7 +182,7 @@ json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, co
   };
   for (const auto& p : model.points) {
     json point = to_json(p);
-    point["delta"] = inputs.delta + p.mesh_deviation_mm;  // what its window and search were made for
+    point["delta"] = geometry::delta_at(p, inputs.delta);  // what its window and search were made for
     out["edge_points"].push_back(std::move(point));
   }
   for (const auto& h : model.holes) out["holes"].push_back(to_json(h));

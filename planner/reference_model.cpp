@@ -83,8 +83,9 @@ void settle_delta(PlanInputs& inputs, double given, const std::string& source, c
   inputs.delta = std::max(given, 3 * point);
   inputs.delta_source = source + "; the mesh's vertex noise sigma " + fixed(sigma * 1e3, 1) + " um on " +
                         std::to_string(model.features.noise.measured) + " vertices, " + fixed(point * 1e3, 1) +
-                        " um on a reference point" + (3 * point > given ? ", so delta is raised to 3 of those" : ", within it") +
-                        "; each point adds the mesh's own distance from its edge (mesh_deviation_mm)";
+                        " um on a typical reference point" + (3 * point > given ? ", so delta is raised to 3 of those" : ", within it") +
+                        "; a point smoothed less raises its own to 3 of its position_sigma_mm, and each adds the mesh's own "
+                        "distance from its edge (mesh_deviation_mm)";
 }
 
 }  // namespace cmm::planner

@@ -60,7 +60,8 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const des
 // The δ a plan on this model is made for: the given bound on the reference's error (from `source`),
 // raised to 3 standard errors of a reference point from the vertex noise the mesh shows
 // (FeatureModel::point_sigma_mm) when that is larger, and said so in delta_source.
-// Each edge point adds its own mesh deviation on top (EdgePoint::mesh_deviation_mm).
+// Each edge point's own δ is geometry::delta_at: its position's 3 standard errors where more, and its
+// mesh deviation on top.
 void settle_delta(PlanInputs& inputs, double given, const std::string& source, const geometry::FeatureModel& model);
 
 }  // namespace cmm::planner

@@ -128,9 +128,10 @@ EdgePlan plan_edge_point(const geometry::EdgePoint& point, const Eigen::Isometry
     plan.reason = "an open boundary: the scan saw one side only, there is nothing to touch against";
     return plan;
   }
-  // Where the mesh's crease is itself off the true edge (a coarse fan's chord), the point's δ grows by it.
+  // Where the point's own position is less sure than the plan's δ allows (a small rim smoothed less), or
+  // the mesh's crease is itself off the true edge (a coarse fan's chord), the point's δ grows by it.
   TouchPlanOptions o = options;
-  o.delta += point.mesh_deviation_mm;
+  o.delta = geometry::delta_at(point, options.delta);
   const WindowResult window = probe_window(point, o.radius, o.delta, o.window);
   if (window.usable) {
     plan.window = window.window;
@@ -141,7 +142,10 @@ EdgePlan plan_edge_point(const geometry::EdgePoint& point, const Eigen::Isometry
     if (plan_two_touch(plan, in_m, T_M_S * point.position, clearance, o)) return plan;
   } else {
     plan.reason = window.reason;
-    if (point.mesh_deviation_mm > 0.25 * options.delta)
+    if (3 * point.position_sigma_mm > options.delta)
+      plan.reason += " (delta here " + fixed(o.delta, 3) + " mm: 3 standard errors of this point's own position, " +
+                     "whose crease the vertex noise moves more than the plan's delta allows)";
+    else if (point.mesh_deviation_mm > 0.25 * options.delta)
       plan.reason += " (delta here " + fixed(o.delta, 3) + " mm, of which " + fixed(point.mesh_deviation_mm, 3) +
                      " mm is the mesh's own distance from the edge: its crease is a chord of a coarse tessellation)";
   }
