@@ -256,13 +256,16 @@ double jackknife_uncertainty(const std::vector<Sample>& samples, const std::vect
 
 // The clean mesh's share, sized for a window's margin (3.5 of it): 5/8 of the fit's correction of the
 // seed facet in the cross-section plane (the facet is exact half a row from the edge, and what the linear
-// fit leaves of that is second order: on the test parts' CAD rows of 5° and 18°, at most 0.58 of it),
-// and the second-order part (1 − cos β ≈ β²/2) of its turn β along the edge.
-double tessellation_uncertainty(const SideNormal& fitted, const Vec3& seed_normal, const Vec3& tangent) {
+// fit leaves of that is second order: on the test parts' CAD rows of 5° and 18°, at most 0.58 of it), or,
+// where the facets lie at enough distances from the edge to tell, 5/4 of what a square term across the
+// edge would move it (`square_shift`, NaN when it cannot be told) when that is less; and the
+// second-order part (1 − cos β ≈ β²/2) of its turn β along the edge.
+double tessellation_uncertainty(const SideNormal& fitted, const Vec3& seed_normal, const Vec3& tangent, double square_shift) {
   const Vec3 in_plane = tangent.cross(fitted.normal);
   const double across = std::asin(std::clamp((seed_normal - fitted.normal).dot(in_plane), -1.0, 1.0));
   const double along = std::asin(std::clamp((seed_normal - fitted.normal).dot(tangent), -1.0, 1.0));
-  return (0.625 * std::abs(across) + along * along / 2) / 3.5;
+  const double left = std::isnan(square_shift) ? 0.625 * std::abs(across) : std::min(0.625 * std::abs(across), 1.25 * std::abs(square_shift));
+  return (left + along * along / 2) / 3.5;
 }
 
 // The fitted normal, and how far the fitted field turns, at the edge facet's own place, from that facet
@@ -270,6 +273,7 @@ double tessellation_uncertainty(const SideNormal& fitted, const Vec3& seed_norma
 struct FittedSide {
   SideNormal side;
   double edge_facet_misfit_rad = 0;
+  double square_term_shift_rad = std::numeric_limits<double>::quiet_NaN();  // see square_term_shift
 };
 
 FittedSide fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
@@ -369,11 +373,47 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
     result.uncertainty_rad = std::hypot(result.uncertainty_rad, (bound / 2 + slack) / 3.5);
     return result;
   }
-  result.uncertainty_rad = std::hypot(result.uncertainty_rad, tessellation_uncertainty(result, seed, tangent));
+  result.uncertainty_rad = std::hypot(result.uncertainty_rad, tessellation_uncertainty(result, seed, tangent, fitted.square_term_shift_rad));
   return result;
 }
 
 namespace {
+
+// How far a square term across the edge moves the fitted field's turn about the edge at the edge: what
+// the linear field, taken to the edge, leaves of a side whose normal turns unevenly across it (exactly
+// so where the turn is quadratic). NaN unless the samples sit at five or more distances from the edge:
+// a square needs three, and two more to tell it from the tessellation.
+double square_term_shift(const std::vector<Sample>& samples, const std::vector<char>& used, const Fit& fit,
+                         const Vec3& tangent) {
+  constexpr double none = std::numeric_limits<double>::quiet_NaN();
+  if (fit.normal.squaredNorm() == 0) return none;
+  const Vec3 in_plane = tangent.cross(fit.normal.normalized());
+  Eigen::Matrix4d square = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d square_y = Eigen::Vector4d::Zero();
+  std::vector<double> depths;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (!used[i]) continue;
+    const Sample& a = samples[i];
+    const double y = std::asin(std::clamp(a.normal.dot(in_plane), -1.0, 1.0)), d = a.x(2);
+    const Eigen::Vector4d q(1.0, a.x(1), d, d * d);
+    square += a.weight * q * q.transpose();
+    square_y += a.weight * y * q;
+    depths.push_back(d);
+  }
+  std::sort(depths.begin(), depths.end());
+  const double scale = depths.empty() ? 0 : depths.back();
+  int distinct = depths.empty() ? 0 : 1;
+  for (std::size_t i = 1; i < depths.size(); ++i) distinct += depths[i] - depths[i - 1] > 1e-3 * scale;
+  if (distinct < 5) return none;
+  const Eigen::Matrix3d linear = square.topLeftCorner<3, 3>();
+  const Eigen::LDLT<Eigen::Matrix4d> with_square(square);
+  const Eigen::LDLT<Eigen::Matrix3d> without(linear);
+  if (with_square.info() != Eigen::Success || without.info() != Eigen::Success || !(with_square.rcond() > 1e-12) ||
+      !(without.rcond() > 1e-12))
+    return none;
+  const Eigen::Vector3d linear_y = square_y.head<3>();
+  return with_square.solve(square_y)(0) - without.solve(linear_y)(0);
+}
 
 double misfit_at(const Fit& fit, const Sample& sample, const Vec3& tangent) {
   const Vec3 predicted = fit.coefficients.transpose() * sample.x;
@@ -423,7 +463,8 @@ FittedSide fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& face
     result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent, clean_sigma_mm);
     if (clean_sigma_mm && plain.normal.squaredNorm() > 0)
       result.uncertainty_rad = std::max(result.uncertainty_rad, jackknife_uncertainty(samples, used, plain, tangent, min_count));
-    return {result, samples.empty() ? 0.0 : misfit_at(plain, samples.front(), tangent)};
+    if (samples.empty()) return {result};
+    return {result, misfit_at(plain, samples.front(), tangent), square_term_shift(samples, used, plain, tangent)};
   }
 
   // A rim is taken as a circle of radius 1/|turn| about `axis`: both sides turn about it, exactly so
@@ -444,7 +485,7 @@ FittedSide fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& face
   const Fit fitted = robust_fit(turned, turned_used, min_count);
   if (fitted.normal.squaredNorm() == 0) {
     result.uncertainty_rad = vertex_noise_uncertainty(mesh, samples, used, plain, tangent, clean_sigma_mm);
-    return {result, misfit_at(plain, samples.front(), tangent)};
+    return {result, misfit_at(plain, samples.front(), tangent), square_term_shift(samples, used, plain, tangent)};
   }
   const Vec3 across = fitted.normal.normalized();
   result.normal = (across - across.dot(tangent) * tangent + result.normal.dot(tangent) * tangent).normalized();
@@ -453,7 +494,7 @@ FittedSide fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& face
     result.uncertainty_rad = std::max(result.uncertainty_rad, jackknife_uncertainty(turned, turned_used, fitted, tangent, min_count));
   result.face_count = static_cast<int>(std::count(turned_used.begin(), turned_used.end(), 1));
   result.facet_spread_rad = std::sqrt(fitted.spread_squared);  // about the field the turn left
-  return {result, misfit_at(fitted, turned.front(), tangent)};
+  return {result, misfit_at(fitted, turned.front(), tangent), square_term_shift(turned, turned_used, fitted, tangent)};
 }
 
 }  // namespace

@@ -300,10 +300,10 @@ TEST_P(TessellationMatrix, PlansAsTheTruePartAllows) {
 }
 
 // Where the windows keep less than 0.9 of the true fan today: the decimated hemisphere-cone. The collapse
-// moved vertices near the rim by up to 53 µm, the facets at the edge are not exact, and the fit states
-// the tessellation's share (5/8 of its correction of a facet 2.7° off): one window keeps 0.874.
+// moved vertices near the rim by up to 53 µm, so the facets at the edge are not exact, and the cone side's
+// fit states 0.44° from the facets' own misfit (its true error is 0.31°): one window keeps 0.897.
 double shortfall(const std::string& part, Variant v) {
-  if (part == "hemisphere_cone" && v == Variant::decimated) return 0.87;
+  if (part == "hemisphere_cone" && v == Variant::decimated) return 0.89;
   return 0.9;
 }
 
