@@ -79,7 +79,7 @@ struct Sample {
   double weight;
   Terms x;
   Vec3 normal;
-  int face;
+  std::vector<int> faces;  // the facet, or the facets of the plane piece it stands for
   Eigen::Quaterniond turn = Eigen::Quaterniond::Identity();  // applied to the facet's own normal
   Vec3 centroid = Vec3::Zero();  // of the facet, or of the plane piece it stands for
 };
@@ -165,25 +165,29 @@ double vertex_noise_uncertainty(const TriangleMesh& mesh, const std::vector<Samp
   for (std::size_t i = 0; i < samples.size(); ++i) {
     if (!used[i]) continue;
     const Sample& a = samples[i];
-    const Vec3 corner[3] = {vertex(mesh, mesh.faces(a.face, 0)), vertex(mesh, mesh.faces(a.face, 1)),
-                            vertex(mesh, mesh.faces(a.face, 2))};
-    const double double_area = (corner[1] - corner[0]).cross(corner[2] - corner[0]).norm();
-    if (!(double_area > 0)) continue;
+    // Facets that share one normal to 1e-9 have their vertices on one plane: whatever the mesh's figure
+    // says of its vertices elsewhere, these carry no noise (a CAD plane cut into slivers would otherwise
+    // state degrees from micrometres on facets a few micrometres wide).
+    if (a.faces.size() > 1) continue;
     // The facet's normal enters the fit turned by a.turn, and its unit normal drops N's own direction:
     // d·(a.turn (I − nnᵀ) δN / |N|), with δN = [v_{k+2} − v_{k+1}]× δv_k for N = (v1 − v0) × (v2 − v0).
+    const int face = a.faces.front();
+    const Vec3 corner[3] = {vertex(mesh, mesh.faces(face, 0)), vertex(mesh, mesh.faces(face, 1)), vertex(mesh, mesh.faces(face, 2))};
+    const double double_area = (corner[1] - corner[0]).cross(corner[2] - corner[0]).norm();
+    if (!(double_area > 0)) continue;
     const Vec3 u = a.turn.conjugate() * Vec3(turn_direction - turn_direction.dot(a.normal) * a.normal);
     const double c = a.weight * fit.intercept_weights.dot(a.x) / double_area;
     double gain = 0;
     for (int k = 0; k < 3; ++k) {
       const Vec3 opposite = corner[(k + 2) % 3] - corner[(k + 1) % 3];
       gain += opposite.squaredNorm();
-      to_turn.emplace_back(mesh.faces(a.face, k), c * u.cross(opposite));
+      to_turn.emplace_back(mesh.faces(face, k), c * u.cross(opposite));
     }
     weighted_residual += a.weight * (a.normal - fit.coefficients.transpose() * a.x).squaredNorm();
     weighted_gain += a.weight * gain / (double_area * double_area);
     w_sum += a.weight, w2_sum += a.weight * a.weight;
   }
-  if (!(weighted_gain > 0) && !given_sigma_mm) return 0;
+  if (!(w_sum > 0) || (!(weighted_gain > 0) && !given_sigma_mm)) return 0;  // no facet here carries noise
   const double effective_count = w_sum * w_sum / w2_sum;
   const double dof = effective_count - fit.parameters;
   const double from_residuals = weighted_gain > 0 ? weighted_residual / weighted_gain * effective_count / std::max(1.0, dof) : 0;
@@ -302,13 +306,18 @@ double chord_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const st
   return chord;
 }
 
-// The turn from the plane piece touching the edge (the facets joined to region.front() across shared
+// The plane piece touching the edge (the facets joined to region.front() across shared
 // edges with its very normal: a CAD quad, a chamfer strip) to the facets bordering that piece, whole (a
 // uniform mesh's neighbours sit beside the facet as often as beyond it, and turn about the edge little):
 // the facet's chord angle. The piece is exact somewhere inside it, so at the edge its normal is off by
 // less than that; a fit that corrects it by more follows the side beyond the next row.
-double next_row_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
-                      const Vec3& point, const Vec3& tangent) {
+struct EdgePiece {
+  std::size_t facets = 1;
+  double chord_rad = 0;
+};
+
+EdgePiece edge_piece(const TriangleMesh& mesh, const FaceGeometry& faces, const std::vector<int>& region,
+                     const Vec3& point, const Vec3& tangent) {
   const int seed = region.front();
   const Vec3 normal = faces.normals.row(seed).transpose();
   // Only the piece beside the point: a strip along a curved edge turns with it farther along.
@@ -337,9 +346,22 @@ double next_row_angle(const TriangleMesh& mesh, const FaceGeometry& faces, const
         (coplanar ? piece : border).push_back(it->second);
       }
     }
-  double turn = 0;
-  for (int g : border) turn = std::max(turn, std::acos(std::clamp(faces.normals.row(g).dot(normal.transpose()), -1.0, 1.0)));
-  return turn;
+  EdgePiece result{piece.size(), 0.0};
+  for (int g : border)
+    result.chord_rad = std::max(result.chord_rad, std::acos(std::clamp(faces.normals.row(g).dot(normal.transpose()), -1.0, 1.0)));
+  return result;
+}
+
+// Standard error of one facet's normal turn about the edge when each of its vertices carries noise σ:
+// the turn is u·δN/|N| with u = tangent × n, and δN = [v_{k+2} − v_{k+1}]× δv_k.
+double facet_turn_noise(const TriangleMesh& mesh, int face, const Vec3& normal, const Vec3& tangent, double sigma_mm) {
+  const Vec3 corner[3] = {vertex(mesh, mesh.faces(face, 0)), vertex(mesh, mesh.faces(face, 1)), vertex(mesh, mesh.faces(face, 2))};
+  const double double_area = (corner[1] - corner[0]).cross(corner[2] - corner[0]).norm();
+  if (!(double_area > 0)) return 0;
+  const Vec3 u = tangent.cross(normal);
+  double sum = 0;
+  for (int k = 0; k < 3; ++k) sum += u.cross(Vec3(corner[(k + 2) % 3] - corner[(k + 1) % 3])).squaredNorm();
+  return sigma_mm * std::sqrt(sum) / double_area;
 }
 
 }  // namespace
@@ -356,8 +378,8 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   // bordering it (and no more than the turn over the next two rows). A fit that moves the normal farther
   // than that, or whose field misses the very facet at the edge by over half what it moves, follows
   // something the facets at the edge do not show (a blend beyond them, a blade's rounded nose): the facet
-  // is kept then, with half that chord angle as its error. A decimated mesh's facets are not exact
-  // (its vertices were moved), and there the fit stands.
+  // is kept then, with half that chord angle and its own vertex noise as its error. A decimated mesh's
+  // facets are not exact (its vertices were moved), and there the fit stands.
   const Vec3 seed = faces.normals.row(region.front()).transpose();
   const double chord = chord_angle(mesh, faces, region, point, tangent);
   const double correction = std::abs(std::asin(std::clamp(result.normal.dot(tangent.cross(seed)), -1.0, 1.0)));
@@ -366,11 +388,15 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   // there whatever a wider fit says of the blend beyond.
   const bool planar = chord < 1e-6;
   const bool exact_facets = planar || clean->mesh_sigma_mm < 0.005;
-  const double bound = exact_facets ? std::min(chord, next_row_angle(mesh, faces, region, point, tangent)) : chord;
+  const EdgePiece piece = exact_facets ? edge_piece(mesh, faces, region, point, tangent) : EdgePiece{1, chord};
+  const double bound = std::min(chord, piece.chord_rad);
   const bool misses_edge_facet = fitted.edge_facet_misfit_rad > std::max(slack, correction / 2);
   if (exact_facets && (correction > bound + slack || misses_edge_facet)) {
+    // The facet's own error, not the fit's: none on a plane piece of several facets (its vertices lie on
+    // one plane), the vertex noise through its corners on a lone facet.
+    const double own = piece.facets > 1 ? 0.0 : facet_turn_noise(mesh, region.front(), seed, tangent, clean->mesh_sigma_mm);
     result.normal = seed;
-    result.uncertainty_rad = std::hypot(result.uncertainty_rad, (bound / 2 + slack) / 3.5);
+    result.uncertainty_rad = std::hypot(own, (bound / 2 + slack) / 3.5);
     return result;
   }
   result.uncertainty_rad = std::hypot(result.uncertainty_rad, tessellation_uncertainty(result, seed, tangent, fitted.square_term_shift_rad));
@@ -439,14 +465,15 @@ FittedSide fitted_side_normal(const TriangleMesh& mesh, const FaceGeometry& face
     const auto [it, added] = clean_sigma_mm ? piece_of.try_emplace(key, samples.size()) : std::pair{piece_of.end(), true};
     if (!added) {
       samples[it->second].weight += faces.areas[f];
+      samples[it->second].faces.push_back(f);
       moments[it->second] += faces.areas[f] * face_centroid(mesh, f);
       continue;
     }
-    samples.push_back({faces.areas[f], Terms::Zero(), n, f, Eigen::Quaterniond::Identity()});
+    samples.push_back({faces.areas[f], Terms::Zero(), n, {f}, Eigen::Quaterniond::Identity()});
     moments.push_back(faces.areas[f] * face_centroid(mesh, f));
   }
   for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Vec3 centroid = samples[i].weight > 0 ? Vec3(moments[i] / samples[i].weight) : face_centroid(mesh, samples[i].face);
+    const Vec3 centroid = samples[i].weight > 0 ? Vec3(moments[i] / samples[i].weight) : face_centroid(mesh, samples[i].faces.front());
     const Vec3 offset = centroid - point;
     const double s = offset.dot(tangent);
     samples[i].x = terms_at(s, (offset - s * tangent).norm());

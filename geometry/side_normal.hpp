@@ -65,7 +65,8 @@ class SideRegionFinder {
 // moves the normal farther than the edge facet's chord angle (the turn to the facets bordering its plane
 // piece, at most that over the next two rows), or its field misses the edge facet itself, on a side that
 // is planar there or on a mesh whose vertices lie on the surface, it is following a blend beyond the
-// edge, and the edge facet is kept with half its chord angle as error.
+// edge, and the edge facet is kept with half its chord angle and its own vertex noise as error. A plane
+// piece of several facets carries no vertex noise: its vertices lie on one plane.
 // What a clean mesh's noise estimate says near a side: the figure for this region (the mesh's vertex
 // noise, or its own vertices' RMS off their local fit where that is larger: a decimated patch, a blend
 // the local quadric does not follow) and the whole mesh's (whether its vertices lie on its surface).

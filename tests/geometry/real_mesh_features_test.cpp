@@ -10,6 +10,7 @@
 #include <map>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "geometry/edge_adjacency.hpp"
 #include "geometry/face_geometry.hpp"
@@ -74,17 +75,25 @@ TEST_P(RealMesh, SideNormalsAgreeWithTheFacetsAtTheEdge) {
     const bool straight = p.n_up.dot(f0) + p.n_down->dot(f1) >= p.n_up.dot(f1) + p.n_down->dot(f0);
     const double up = turn_about(p.tangent, p.n_up, straight ? f0 : f1), down = turn_about(p.tangent, *p.n_down, straight ? f1 : f0);
     // A facet on a curved side is exact somewhere inside it: the normal at the edge may differ from it
-    // by up to its chord angle, the angle to its neighbours across its other two edges. All of that angle
-    // counts, not only its part about the edge: on a uniform mesh a facet's neighbours lie beside it as
-    // often as beyond it (a Ø50 sphere cut into 1 mm facets turns 0.84° from the facet at the equator to
-    // the edge, while its neighbours turn 0.57° about it).
+    // by up to its chord angle, the angle to the facets around it. The facet is its plane piece at the
+    // edge (a CAD quad cut in two: the half touching the edge and its coplanar other half), and all of
+    // the angle counts, not only its part about the edge: on a uniform mesh a facet's neighbours lie
+    // beside it as often as beyond it (a Ø50 sphere cut into 1 mm facets turns 0.84° from the facet at
+    // the equator to the edge, while its neighbours turn 0.57° about it).
     auto chord = [&](int f) {
-      double most = 0;
+      const Vec3 n = faces.normals.row(f).transpose();
+      std::vector<int> piece = {f};
       for (int k = 0; k < 3; ++k) {
         const int e = adjacency.face_edges(f, k), g = adjacency.other_face(e, f);
-        if (e == nearest || g < 0 || model.features.is_feature[e]) continue;
-        most = std::max(most, std::acos(std::clamp(faces.normals.row(g).dot(faces.normals.row(f)), -1.0, 1.0)));
+        if (e != nearest && g >= 0 && !model.features.is_feature[e] && faces.normals.row(g).dot(n) > 1 - 1e-12) piece.push_back(g);
       }
+      double most = 0;
+      for (int h : piece)
+        for (int k = 0; k < 3; ++k) {
+          const int e = adjacency.face_edges(h, k), g = adjacency.other_face(e, h);
+          if (e == nearest || g < 0 || model.features.is_feature[e]) continue;
+          most = std::max(most, std::acos(std::clamp(faces.normals.row(g).dot(n), -1.0, 1.0)));
+        }
       return most;
     };
     // The 0.1° the extractor grants a fit beyond the chord angle before it keeps the facet instead.
@@ -107,12 +116,10 @@ TEST_P(RealMesh, SideNormalsAgreeWithTheFacetsAtTheEdge) {
               100.0 * probeable / std::max(1, sharp), checked, worst / deg, beyond_half_degree, agreeing);
   for (const auto& [reason, count] : reasons) std::printf("    %5d x %s\n", count, reason.c_str());
   EXPECT_GT(checked, 50);
-  // The aim (issue 15) is every point; today all of blade's agree and 478 of fandisk's 483. The other
-  // five lie beside one blend, where the facet at the edge is one of a coplanar pair whose other half
-  // borders facets turned 2-3°: the extractor grants a fit up to that turn and the fit moves ~1°, while
-  // this test counts the edge facet's own neighbours only. This holds that ground.
-  EXPECT_GE(agreeing, (GetParam() == "blade.ply" ? 1.0 : 0.985) * checked);
-  EXPECT_LT(worst, 20 * deg);
+  // Every point: within 0.5° of the facets at the edge, or where the side is curved within their chord
+  // angle (24 of fandisk's, beside its blends, by up to 4.7°, where their pieces' neighbours turn more).
+  EXPECT_EQ(agreeing, checked);
+  EXPECT_LT(worst, 6 * deg);
 }
 
 INSTANTIATE_TEST_SUITE_P(TestData, RealMesh, ::testing::Values("fandisk.ply", "blade.ply"),
