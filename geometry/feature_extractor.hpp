@@ -57,18 +57,23 @@ class Extractor {
  private:
   // feature_model.cpp
   std::vector<CurveSample> sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points,
-                                        const std::vector<double>& noise_gain);
+                                        const std::vector<double>& noise_gain, const std::optional<Circle3>& rim);
   double position_sigma(const std::vector<double>& noise_gain, int segment) const;
   void check_point_count() const;
-  std::vector<Vec3> smooth_curve(const std::vector<Vec3>& raw, bool closed, double length, std::vector<double>& noise_gain) const;
+  std::optional<Circle3> rim_circle(const std::vector<Vec3>& raw, bool closed, double length) const;
+  std::vector<Vec3> smooth_curve(const std::vector<Vec3>& raw, bool closed, const std::optional<Circle3>& rim,
+                                 std::vector<double>& noise_gain) const;
   bool two_distinct_sides(const std::vector<CurveSample>& samples) const;
   SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn, double along);
-  double along_edge(const std::vector<Vec3>& points, bool closed, const PolylineSample& s) const;
+  double along_edge(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, const std::optional<Circle3>& rim) const;
   // The vertex noise a clean mesh's side normals carry over `region` (its facets' residuals are the
   // tessellation's), and the whole mesh's; none on a noisy mesh, whose residuals are the noise.
   std::optional<CleanNoise> clean_noise(const std::vector<int>& region) const;
   double across_edge(int seed, const PolylineSample& s) const;
-  Vec3 edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double along) const;
+  Vec3 curve_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double reach,
+                  const std::optional<Circle3>& rim) const;
+  Vec3 edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double along,
+                 const std::optional<Circle3>& rim) const;
   void emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole);
   void emit_loop_points(SideRegionFinder& finder, int loop_index);
   double distinct_sides_rad() const { return 0.5 * options_.features.angle_deg * std::numbers::pi / 180; }

@@ -69,9 +69,10 @@ FeatureModel Extractor::run() {
   for (std::size_t c = 0; c < curves.size(); ++c) {
     options_.cancel.throw_if_requested("the feature curves");
     const std::vector<Vec3> raw = positions(mesh_, curves[c].vertices);
+    const std::optional<Circle3> rim = rim_circle(raw, curves[c].closed, curves[c].length);
     std::vector<double> noise_gain;
-    const std::vector<Vec3> points = smooth_curve(raw, curves[c].closed, curves[c].length, noise_gain);
-    samples[c] = sample_curve(finder, curves[c], points, noise_gain);
+    const std::vector<Vec3> points = smooth_curve(raw, curves[c].closed, rim, noise_gain);
+    samples[c] = sample_curve(finder, curves[c], points, noise_gain, rim);
     if (!two_distinct_sides(samples[c])) {
       samples[c].clear();
       ++model_.rejected_curves;
@@ -106,7 +107,7 @@ double Extractor::position_sigma(const std::vector<double>& noise_gain, int segm
 }
 
 std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const FeatureCurve& curve, const std::vector<Vec3>& points,
-                                                 const std::vector<double>& noise_gain) {
+                                                 const std::vector<double>& noise_gain, const std::optional<Circle3>& rim) {
   std::vector<CurveSample> result;
   for (const PolylineSample& s : sample_polyline(points, curve.closed, options_.spacing)) {
     CurveSample sample{s, {}, {}, -1, -1, {}};
@@ -117,8 +118,8 @@ std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const
       (mesh_.faces(h / 3, h % 3) == from ? sample.left_face : sample.right_face) = h / 3;
     }
     if (sample.left_face < 0 || sample.right_face < 0) continue;  // inconsistent orientation here
-    const double along = along_edge(points, curve.closed, s);
-    const Vec3 turn = edge_turn(points, curve.closed, s, along);
+    const double along = along_edge(points, curve.closed, s, rim);
+    const Vec3 turn = edge_turn(points, curve.closed, s, along, rim);
     sample.left = side(finder, sample.left_face, s, turn, along);
     sample.right = side(finder, sample.right_face, s, turn, along);
     sample.chord = chord_deviation(points, curve.closed, s.segment);
@@ -132,21 +133,26 @@ std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const
 // of its vertices (a Ø6 rim has 19: 7 by arc length would cut its corner). A rim (a closed circular
 // curve) is smoothed by angle instead, on its radius and height, over as far as the side normals reach
 // along an edge (75 σ), at most a quarter of the way round to either side. An exact mesh's are kept.
-std::vector<Vec3> Extractor::smooth_curve(const std::vector<Vec3>& raw, bool closed, double length,
+std::vector<Vec3> Extractor::smooth_curve(const std::vector<Vec3>& raw, bool closed, const std::optional<Circle3>& rim,
                                           std::vector<double>& noise_gain) const {
   const int vertices = static_cast<int>(raw.size());
   if (half_window_ == 0 || vertices == 0) {
     noise_gain.assign(raw.size(), 1.0);
     return raw;
   }
-  if (closed) {
-    const Circle3 circle = fit_circle(raw);
-    if (is_circle(circle, length, options_.circle_tolerance)) {
-      const auto reach = static_cast<int>(std::lround(noise_along_ * vertices / length));
-      return smooth_rim(raw, circle, std::min(std::max(reach, half_window_), vertices / 4), &noise_gain);
-    }
+  if (rim) {
+    const auto reach = static_cast<int>(std::lround(noise_along_ * vertices / (2 * std::numbers::pi * rim->radius)));
+    return smooth_rim(raw, *rim, std::min(std::max(reach, half_window_), vertices / 4), &noise_gain);
   }
   return smooth_polyline(raw, closed, closed ? std::min(half_window_, vertices / 12) : half_window_, &noise_gain);
+}
+
+// The circle a closed curve runs round, if it is one (a rim).
+std::optional<Circle3> Extractor::rim_circle(const std::vector<Vec3>& raw, bool closed, double length) const {
+  if (!closed) return std::nullopt;
+  const Circle3 circle = fit_circle(raw);
+  if (!is_circle(circle, length, options_.circle_tolerance)) return std::nullopt;
+  return circle;
 }
 
 // A crease separates two sides that face different ways. Where the neighbourhood normals of the
@@ -160,11 +166,25 @@ bool Extractor::two_distinct_sides(const std::vector<CurveSample>& samples) cons
   return turn[turn.size() / 2] >= distinct_sides_rad();
 }
 
+// How the edge turns at a sample (axis × rate per mm): a rim's is its circle's, which a coarse or uneven
+// polyline (a decimated rim's chords of every length) does not tell as well; another curve's is read
+// from the polyline over the reach.
+Vec3 Extractor::curve_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double reach,
+                           const std::optional<Circle3>& rim) const {
+  if (!rim) return polyline_turn(points, closed, s, reach);
+  const Vec3 axis = rim->normal.normalized();
+  Vec3 to_centre = rim->centre - s.position;
+  to_centre -= to_centre.dot(axis) * axis;
+  if (!(to_centre.norm() > 0)) return Vec3::Zero();
+  return s.direction.cross(to_centre.normalized()) / rim->radius;
+}
+
 // The turn side_normal takes back out of a side's facets. Around a small rim the side region spans
 // a wide arc, where a few degrees' error in the estimated axis would turn the facets of a flat top
 // by more than the turn's own second-order effect: there the linear fit alone is better.
-Vec3 Extractor::edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double along) const {
-  const Vec3 turn = polyline_turn(points, closed, s, 2 * along);
+Vec3 Extractor::edge_turn(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, double along,
+                          const std::optional<Circle3>& rim) const {
+  const Vec3 turn = curve_turn(points, closed, s, 2 * along, rim);
   return turn.norm() * along <= max_turn_reach ? turn : Vec3::Zero();
 }
 
@@ -172,12 +192,13 @@ Vec3 Extractor::edge_turn(const std::vector<Vec3>& points, bool closed, const Po
 // where the edge is straight or turns slowly enough for edge_turn to take the turn out of the facets over
 // that reach (more facets, the same bias); but at least the reference spacing and the crease segment the
 // point lies on with half its neighbours' reach, so the facets touching the edge here are always in.
-double Extractor::along_edge(const std::vector<Vec3>& points, bool closed, const PolylineSample& s) const {
+double Extractor::along_edge(const std::vector<Vec3>& points, bool closed, const PolylineSample& s,
+                             const std::optional<Circle3>& rim) const {
   const auto i = static_cast<std::size_t>(s.segment);
   const double segment = (points[(i + 1) % points.size()] - points[i]).norm();
   double noise = noise_along_;
   if (model_.features.noisy) {
-    const double turn = polyline_turn(points, closed, s, 4 * noise_along_).norm();
+    const double turn = curve_turn(points, closed, s, 4 * noise_along_, rim).norm();
     noise = std::max(noise, std::min(2 * noise_along_, turn > 0 ? 0.9 * max_turn_reach / turn : 2 * noise_along_));
   }
   return std::max({noise, options_.spacing, 1.5 * segment});
@@ -288,12 +309,13 @@ void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& sam
 void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
   const BoundaryLoop& loop = model_.loops[loop_index];
   const std::vector<Vec3> raw = positions(mesh_, loop.vertices);
+  const std::optional<Circle3> rim = rim_circle(raw, true, loop.perimeter);
   std::vector<double> noise_gain;
-  const std::vector<Vec3> points = smooth_curve(raw, true, loop.perimeter, noise_gain);
+  const std::vector<Vec3> points = smooth_curve(raw, true, rim, noise_gain);
   std::optional<Hole> hole;
   if (loop.kind == LoopKind::hole) {
-    const Circle3 circle = fit_circle(raw);
-    if (is_circle(circle, loop.perimeter, options_.circle_tolerance)) {
+    if (rim) {
+      const Circle3& circle = *rim;
       hole = Hole{};
       hole->id = static_cast<int>(model_.holes.size());
       hole->source = HoleSource::open_boundary;
@@ -306,10 +328,10 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
   }
   for (const PolylineSample& s : sample_polyline(points, true, options_.spacing)) {
     const int face = loop.half_edges[s.segment] / 3;
-    const double along = along_edge(points, true, s);
+    const double along = along_edge(points, true, s, rim);
     const std::vector<int>& region = finder.region(face, s.position, s.direction, across_edge(face, s), along);
     const SideNormal side =
-        side_normal(mesh_, faces_, region, s.position, s.direction, edge_turn(points, true, s, along), clean_noise(region));
+        side_normal(mesh_, faces_, region, s.position, s.direction, edge_turn(points, true, s, along, rim), clean_noise(region));
     EdgePoint p;
     p.id = static_cast<int>(model_.points.size());
     p.position = s.position;
