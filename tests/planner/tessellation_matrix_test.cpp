@@ -174,7 +174,7 @@ TEST_P(TessellationMatrix, PlansAsTheTruePartAllows) {
   std::mt19937_64 rng(4242);
   std::normal_distribution<double> gauss;
   std::uniform_real_distribution<double> unit(0, 1);
-  int on_edges = 0, windows = 0, outside = 0, narrow = 0, uncovered = 0, touches = 0, planned = 0, deviated = 0, beyond_delta = 0;
+  int on_edges = 0, windows = 0, outside = 0, narrow = 0, uncovered = 0, touches = 0, planned = 0, deviated = 0, beyond_delta = 0, beyond_stated = 0;
   double worst_normal = 0, worst_ratio = 0, least_coverage = 1, worst_contact = 0;
   std::map<std::string, int> reasons;
   std::vector<geometry::EdgePoint> near_truth;
@@ -208,6 +208,7 @@ TEST_P(TessellationMatrix, PlansAsTheTruePartAllows) {
       worst_normal = std::max(worst_normal, error);
       worst_ratio = std::max(worst_ratio, error / std::max(0.5 * deg, stated));
       uncovered += error > std::max(noise_free(c.variant) ? 0.5 * deg : 0.0, stated);
+      beyond_stated += error > stated;  // what a window's margin takes: it must cover the truth, 0.5° or not
       EXPECT_LE(error, noise_free(c.variant) ? std::max(0.5 * deg, stated) : std::min(2 * deg, stated))
           << c.part << " " << name_of(c.variant) << " point " << p.id << " side " << side << " at " << p.position.transpose()
           << ": " << error / deg << " deg off, states " << stated / deg;
@@ -274,11 +275,12 @@ TEST_P(TessellationMatrix, PlansAsTheTruePartAllows) {
   const double reachable = planned_fraction(true_points(t.part, 2.0), true_clearance, options);
 
   std::printf("[ %s %s ] %ld faces, noise %.4f um (vertices off the surface up to %.4f um), delta %.3f: %d convex edge points "
-              "(%d with mesh deviation over delta/4), normals worst %.3f deg (%.2f x max(0.5 deg, stated bound)), %d uncovered; "
+              "(%d with mesh deviation over delta/4), normals worst %.3f deg (%.2f x max(0.5 deg, stated bound)), %d uncovered, "
+              "%d beyond the stated bound; "
               "%d windows (least %.3f of the true fan, %d below its minimum), %d outside; probeable %.3f, reachable %.3f; "
               "%d perturbed plans, %d touches, worst %.4f um off the edge; %d of %zu points beyond their delta\n",
               c.part.c_str(), name_of(c.variant), static_cast<long>(reference.faces.rows()), noise.sigma_mm * 1e3,
-              vertex_deviation * 1e3, inputs.delta, on_edges, deviated, worst_normal / deg, worst_ratio, uncovered, windows,
+              vertex_deviation * 1e3, inputs.delta, on_edges, deviated, worst_normal / deg, worst_ratio, uncovered, beyond_stated, windows,
               least_coverage, narrow, outside, fraction, reachable, planned, touches, worst_contact * 1e3, beyond_delta,
               near_truth.size());
   for (const auto& [reason, count] : reasons) std::printf("    %5d x %s\n", count, reason.c_str());
@@ -288,6 +290,7 @@ TEST_P(TessellationMatrix, PlansAsTheTruePartAllows) {
   EXPECT_LE(beyond_delta, noise_free(c.variant) ? 0.0 : 0.02 * static_cast<double>(near_truth.size()))
       << beyond_delta << " of " << near_truth.size() << " points lie beyond their delta";
   EXPECT_EQ(uncovered, 0);
+  EXPECT_EQ(beyond_stated, 0) << "the stated uncertainty must cover the truth";
   EXPECT_EQ(outside, 0);
   EXPECT_EQ(narrow, 0);
   if (noise_free(c.variant) && c.variant != Variant::coarse_fan) {
