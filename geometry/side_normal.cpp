@@ -388,10 +388,12 @@ SideNormal side_normal(const TriangleMesh& mesh, const FaceGeometry& faces, cons
   // there whatever a wider fit says of the blend beyond.
   const bool planar = chord < 1e-6;
   const bool exact_facets = planar || clean->mesh_sigma_mm < 0.005;
-  const EdgePiece piece = exact_facets ? edge_piece(mesh, faces, region, point, tangent) : EdgePiece{1, chord};
-  const double bound = std::min(chord, piece.chord_rad);
   const bool misses_edge_facet = fitted.edge_facet_misfit_rad > std::max(slack, correction / 2);
-  if (exact_facets && (correction > bound + slack || misses_edge_facet)) {
+  // The piece only matters where the fit moved the facet at all (on a plane it did not).
+  const bool check = exact_facets && (correction > slack || misses_edge_facet);
+  const EdgePiece piece = check ? edge_piece(mesh, faces, region, point, tangent) : EdgePiece{1, chord};
+  const double bound = std::min(chord, piece.chord_rad);
+  if (check && (correction > bound + slack || misses_edge_facet)) {
     // The facet's own error, not the fit's: none on a plane piece of several facets (its vertices lie on
     // one plane), the vertex noise through its corners on a lone facet.
     const double own = piece.facets > 1 ? 0.0 : facet_turn_noise(mesh, region.front(), seed, tangent, clean->mesh_sigma_mm);
