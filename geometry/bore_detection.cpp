@@ -11,11 +11,10 @@
 
 namespace cmm::geometry::detail {
 
-// A closed circular curve with one side a wall around the axis whose normals face the axis.
-std::optional<Rim> Extractor::bore_rim(int curve, const std::vector<Vec3>& points, const std::vector<CurveSample>& samples) {
-  const Circle3 circle = fit_circle(points);
-  if (!is_circle(circle, model_.features.curves[curve].length, options_.circle_tolerance) || samples.empty())
-    return std::nullopt;
+// A closed circular curve (`circle`, from rim_circle) with one side a wall around the axis whose normals
+// face the axis.
+std::optional<Rim> Extractor::bore_rim(int curve, const Circle3& circle, const std::vector<CurveSample>& samples) {
+  if (samples.empty()) return std::nullopt;
   auto faces_axis = [&](const Vec3& n, const Vec3& p) {
     return std::abs(n.dot(circle.normal)) < 0.5 && n.dot(circle.centre - p) > 0;
   };

@@ -78,7 +78,7 @@ class Extractor {
   void emit_loop_points(SideRegionFinder& finder, int loop_index);
   double distinct_sides_rad() const { return 0.5 * options_.features.angle_deg * std::numbers::pi / 180; }
   // bore_detection.cpp
-  std::optional<Rim> bore_rim(int curve, const std::vector<Vec3>& points, const std::vector<CurveSample>& samples);
+  std::optional<Rim> bore_rim(int curve, const Circle3& circle, const std::vector<CurveSample>& samples);
   std::vector<int> bores(SideRegionFinder& finder, std::vector<Rim>& rims);
   void fit_wall_axis(Rim& rim, const std::vector<int>& wall) const;
   void measure_wall_draft(Rim& rim, const std::vector<int>& wall) const;

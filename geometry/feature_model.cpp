@@ -78,8 +78,8 @@ FeatureModel Extractor::run() {
       ++model_.rejected_curves;
       continue;
     }
-    if (curves[c].closed) {
-      if (auto rim = bore_rim(static_cast<int>(c), raw, samples[c])) rims.push_back(*rim);
+    if (rim) {
+      if (auto bore = bore_rim(static_cast<int>(c), *rim, samples[c])) rims.push_back(*bore);
     }
   }
   options_.cancel.throw_if_requested("bore detection");
