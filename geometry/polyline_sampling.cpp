@@ -45,7 +45,13 @@ Eigen::MatrixXd local_quadratic(const Eigen::MatrixXd& values, bool closed, int 
       const double u = design(j, 1) - t_at_i;
       design.row(j) << 1.0, u, u * u;
     }
-    smoothed.row(i) = design.colPivHouseholderQr().solve(local).row(0);
+    // Vertices that coincide in the parameter leave no quadratic to fit: the vertex stays as it is.
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
+    if (qr.rank() < 3) {
+      smoothed.row(i) = values.row(i);
+      continue;
+    }
+    smoothed.row(i) = qr.solve(local).row(0);
     // The smoothed vertex is the fit's constant term: its variance over a raw vertex's is ((XᵀX)⁻¹)₀₀.
     if (noise_gain) (*noise_gain)[static_cast<std::size_t>(i)] = (design.transpose() * design).inverse()(0, 0);
   }

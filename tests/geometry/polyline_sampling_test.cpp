@@ -79,6 +79,11 @@ TEST(PolylineSampling, SmoothingSaysWhatNoiseItLeaves) {
   EXPECT_GT(gain[0], gain[1]);
   smooth_polyline(line, false, 0, &gain);
   EXPECT_EQ(gain, std::vector<double>(line.size(), 1.0));
+  // Vertices stacked on one spot (a hostile crease) leave nothing to fit: kept as they are, not NaN.
+  const std::vector<Vec3> stacked(9, Vec3(1, 2, 3));
+  const std::vector<Vec3> kept = smooth_polyline(stacked, true, 3, &gain);
+  EXPECT_EQ(kept, stacked);
+  EXPECT_EQ(gain, std::vector<double>(stacked.size(), 1.0));
 }
 
 TEST(PolylineSampling, ARimIsSmoothedByAngleWithoutCuttingItsCorner) {
