@@ -132,7 +132,8 @@ std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const
 // A noisy mesh's creases are smoothed over ±3 vertices by arc length, a closed one over at most a twelfth
 // of its vertices (a Ø6 rim has 19: 7 by arc length would cut its corner). A rim (a closed circular
 // curve) is smoothed by angle instead, on its radius and height, over as far as the side normals reach
-// along an edge (75 σ), at most a quarter of the way round to either side. An exact mesh's are kept.
+// along an edge (75 σ), at most a quarter of the way round and 32 vertices to either side. An exact
+// mesh's are kept.
 std::vector<Vec3> Extractor::smooth_curve(const std::vector<Vec3>& raw, bool closed, const std::optional<Circle3>& rim,
                                           std::vector<double>& noise_gain) const {
   const int vertices = static_cast<int>(raw.size());
@@ -141,8 +142,10 @@ std::vector<Vec3> Extractor::smooth_curve(const std::vector<Vec3>& raw, bool clo
     return raw;
   }
   if (rim) {
-    const auto reach = static_cast<int>(std::lround(noise_along_ * vertices / (2 * std::numbers::pi * rim->radius)));
-    return smooth_rim(raw, *rim, std::min(std::max(reach, half_window_), vertices / 4), &noise_gain);
+    // At most 32 vertices a side: a fine ring of a million vertices must not cost a million squared.
+    const double reach = std::min(32.0, noise_along_ * vertices / (2 * std::numbers::pi * rim->radius));
+    return smooth_rim(raw, *rim, std::min(std::max(static_cast<int>(std::lround(reach)), half_window_), vertices / 4),
+                      &noise_gain);
   }
   return smooth_polyline(raw, closed, closed ? std::min(half_window_, vertices / 12) : half_window_, &noise_gain);
 }
