@@ -13,7 +13,7 @@ namespace cmm::planner {
 const char* to_string(ModelError::Kind kind) {
   switch (kind) {
     case ModelError::Kind::unreadable: return "unreadable";
-    case ModelError::Kind::point_cloud: return "point_cloud";
+    case ModelError::Kind::scan: return "scan";
     case ModelError::Kind::empty: return "empty";
     case ModelError::Kind::out_of_range: return "out_of_range";
     case ModelError::Kind::too_large: return "too_large";
@@ -34,7 +34,7 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const des
     throw ModelError(Kind::unreadable, file, e.what());
   }
   if (const auto* cloud = std::get_if<geometry::PointCloud>(&read.model))
-    throw ModelError(Kind::point_cloud, file,
+    throw ModelError(Kind::scan, file,
                      name + " holds a point cloud (" + std::to_string(cloud->points.rows()) +
                          " points, no faces). Meshing a raw scan (thinning and triangulation, thesis Ch. 3-4) is not "
                          "built yet: give a triangle mesh (STL, PLY, OBJ or OFF).");

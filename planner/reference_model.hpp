@@ -5,11 +5,13 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "geometry/cancellation.hpp"
 #include "geometry/feature_model.hpp"
+#include "geometry/scan_front_end.hpp"
 #include "hal/description/machine_description.hpp"
 #include "planner/model_limits.hpp"
 #include "planner/plan_json.hpp"
@@ -20,6 +22,9 @@ struct ReferenceModel {
   geometry::TriangleMesh mesh;  // S, mm
   geometry::FeatureModel features;
   PlanInputs inputs;  // what the plan JSON records of its inputs: file, scale, spacing, angle, read report
+  // When the file was a raw scan: how it was thinned and triangulated into `mesh`. A job stores
+  // `mesh` in its folder and a resumed job plans on that, never re-meshing the scan.
+  std::optional<geometry::ScanReport> scan;
 };
 
 struct ReferenceModelOptions {
@@ -28,6 +33,9 @@ struct ReferenceModelOptions {
   double feature_angle_deg = 30;
   ModelLimits limits;
   geometry::CancelCheck cancel;  // polled between the steps of feature extraction
+  // For a raw scan (a file of points without faces): tolerance, bin size, adaptive bins. The scan's
+  // coordinates are scaled first, so the tolerance and bin size are in mm.
+  geometry::ScanOptions scan;
 };
 
 // Why a model file gives no reference model; what() names the file and, where its reader knows it,
@@ -36,7 +44,7 @@ class ModelError : public std::runtime_error {
  public:
   enum class Kind {
     unreadable,       // the reader refused the file
-    point_cloud,      // points without faces: a raw scan, which the scan front end will mesh
+    scan,             // a raw scan (points without faces) the front end could not mesh
     empty,            // no triangles left after the degenerate ones were dropped
     out_of_range,     // the scale takes coordinates beyond a double's range
     too_large,        // planner::check_model_limits refused it
@@ -50,7 +58,7 @@ class ModelError : public std::runtime_error {
   std::filesystem::path file;
   std::size_t points = 0, limit = 0;  // too_many_points only
 };
-const char* to_string(ModelError::Kind kind);  // "unreadable", "point_cloud", …
+const char* to_string(ModelError::Kind kind);  // "unreadable", "scan", …
 
 // Throws ModelError, or geometry::Cancelled when options.cancel asks. `travel_box` is the machine's,
 // for the model limits (a size check: the frames differ before registration).

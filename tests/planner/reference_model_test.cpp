@@ -50,7 +50,7 @@ TEST(ReferenceModel, EachRefusalIsItsKind) {
   const fs::path dir = fs::temp_directory_path() / ("cmmd_reference_model_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::ofstream(dir / "cloud.xyz") << "0 0 0\n1 0 0\n0 1 0\n";
-  EXPECT_EQ(kind_of(dir / "cloud.xyz"), ModelError::Kind::point_cloud);
+  EXPECT_EQ(kind_of(dir / "cloud.xyz"), ModelError::Kind::scan);
   EXPECT_EQ(kind_of(data / "hostile" / "huge_tetrahedron.ply"), ModelError::Kind::too_large);
   ReferenceModelOptions huge;
   huge.scale = 1e308;
