@@ -16,6 +16,7 @@
 #include "geometry/mesh_io.hpp"
 #include "hal/description/eigen_json.hpp"
 #include "sim/raw_scan.hpp"
+#include "sim/scan_borders.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/scanned_mesh.hpp"
 
@@ -115,7 +116,12 @@ int scan(Options o) {
                                                                    .seed = o.seed});
     geometry::write_cloud(o.cloud, raw.cloud);
     const auto strays = std::count(raw.truth.stray.begin(), raw.truth.stray.end(), true);
-    truth["cloud"] = {{"file", o.cloud}, {"points", raw.cloud.points.rows()}, {"strays", strays}};
+    truth["cloud"] = {{"file", o.cloud}, {"points", raw.cloud.points.rows()}, {"strays", strays}, {"borders", nlohmann::json::array()}};
+    // What a mesh of the scan should keep open: the borders of the seen region, no others.
+    for (const sim::ScanBorder& border : sim::scan_borders(part.mesh, views, o.max_incidence_deg))
+      truth["cloud"]["borders"].push_back({{"centre", description::vec3_json(border.centre)},
+                                           {"perimeter_mm", border.perimeter_mm},
+                                           {"kind", border.kind == geometry::LoopKind::hole ? "hole" : "outer"}});
     std::cout << o.cloud << ": raw scan of " << o.part << ", " << raw.cloud.points.rows() << " points from "
               << views.size() << " views, " << strays << " strays\n";
   }

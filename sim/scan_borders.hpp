@@ -1,0 +1,27 @@
+// The borders of what a synthesized scan saw: the boundary loops of the true part's faces that some
+// view sees. A mesh made from the scan should have exactly these openings (the unseen underside, a
+// bore's unseen depth) and no others; the tests and `cmm-scan --truth` report them.
+#pragma once
+
+#include <vector>
+
+#include "geometry/boundary_loops.hpp"
+#include "geometry/mesh.hpp"
+#include "sim/scan_views.hpp"
+#include "sim/visibility.hpp"
+
+namespace cmm::sim {
+
+struct ScanBorder {
+  geometry::Vec3 centre;        // mean of the loop's vertices, scene frame
+  double perimeter_mm = 0;
+  geometry::LoopKind kind = geometry::LoopKind::outer;
+  geometry::Vec3 surface_normal;  // of the seen surface next to the border
+};
+
+// A face counts as seen when some view sees its centroid: the synthesis samples faces area-uniformly,
+// so a seen face of any size has points, and a face half in shadow is split by the border anyway.
+std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const std::vector<ScanView>& views,
+                                     double max_incidence_deg = kDefaultMaxIncidenceDeg);
+
+}  // namespace cmm::sim

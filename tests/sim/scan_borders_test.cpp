@@ -1,0 +1,51 @@
+// The seen region's borders that the scan-front-end tests hold a scan's mesh to.
+#include "sim/scan_borders.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "geometry/analytic_parts.hpp"
+
+namespace cmm::sim {
+namespace {
+
+// The case-3 block seen from above and around: its underside (one outer border along the bottom
+// edges), the Ø42 through bore's lower rim, and where each Ø10 bore's wall falls into shadow.
+TEST(ScanBorders, Case3BlockSeenFromAboveAndAround) {
+  const auto part = geometry::make_analytic_part("case3_block", 2.0);
+  const std::vector<ScanBorder> borders = scan_borders(part.mesh, default_views());
+  ASSERT_EQ(borders.size(), 6u);
+  int outer = 0, big = 0, small = 0;
+  for (const ScanBorder& b : borders) {
+    if (b.kind == geometry::LoopKind::outer) {
+      ++outer;
+      EXPECT_NEAR(b.perimeter_mm, 2 * (88 + 95), 1e-6);
+      EXPECT_NEAR(b.centre.z(), 0, 1e-9);
+    } else if (b.perimeter_mm > 100) {
+      ++big;
+      EXPECT_NEAR(b.perimeter_mm, M_PI * 42, 0.5);  // the rim at the bottom of the through bore
+      EXPECT_NEAR(b.centre.z(), 0, 1e-9);
+    } else {
+      ++small;
+      EXPECT_GT(b.centre.z(), 0);  // inside the bore, above its bottom mouth
+      EXPECT_LT(b.centre.z(), 41);
+    }
+  }
+  EXPECT_EQ(outer, 1);
+  EXPECT_EQ(big, 1);
+  EXPECT_EQ(small, 4);
+}
+
+TEST(ScanBorders, CubeSeenFromEverySideButBelowHasOneBorder) {
+  const auto part = geometry::make_analytic_part("cube", 2.0);
+  const std::vector<ScanBorder> borders = scan_borders(part.mesh, default_views());
+  ASSERT_EQ(borders.size(), 1u);
+  EXPECT_EQ(borders[0].kind, geometry::LoopKind::outer);
+  EXPECT_NEAR(borders[0].perimeter_mm, 4 * 40, 1e-6);  // the side walls' lower edges
+  EXPECT_NEAR(borders[0].centre.z(), 0, 1e-9);
+}
+
+}  // namespace
+}  // namespace cmm::sim
