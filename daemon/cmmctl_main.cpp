@@ -140,13 +140,23 @@ int watch(RpcClient& client, int id) {
   }
 }
 
+// How a raw scan is meshed (docs/api.md, Job request): sent only when given, so cmmd's defaults hold.
+struct ScanFlags {
+  double tolerance_mm = 0.05;
+  double bin_size_mm = 0;
+  bool adaptive = false;
+};
+
 json job_request(const std::string& model, const CLI::App& submit, double scale, double delta, double spacing,
-                 double angle, std::uint64_t seed, const std::string& name, const std::string& corners,
-                 const std::string& measure) {
+                 double angle, const ScanFlags& scan, std::uint64_t seed, const std::string& name,
+                 const std::string& corners, const std::string& measure) {
   json r = {{"model", model}, {"scale", scale}, {"seed", seed}};
   if (submit.count("--delta")) r["delta_mm"] = delta;
   if (submit.count("--spacing")) r["spacing_mm"] = spacing;
   if (submit.count("--feature-angle")) r["feature_angle_deg"] = angle;
+  if (submit.count("--tolerance")) r["tolerance_mm"] = scan.tolerance_mm;
+  if (submit.count("--bin-size")) r["bin_size_mm"] = scan.bin_size_mm;
+  if (scan.adaptive) r["adaptive"] = true;
   if (!name.empty()) r["name"] = name;
   if (!corners.empty()) r["registration"] = registration_file(corners);
   else if (!measure.empty()) r["registration"] = {{"measure_plate", registration_file(measure)}};
@@ -166,13 +176,22 @@ int main(int argc, char** argv) {
 
   std::string model, corners, measure, name, format = "json", output, tip;
   double scale = 1, delta = 0.2, spacing = 2, angle = 30;
+  ScanFlags scan;
   std::uint64_t seed = 1;
   bool watch_job = false, reregister = false, requalify = false;
   int id = 0;
 
   auto add_job_options = [&](CLI::App* c) {
-    c->add_option("MODEL", model, "mesh file (uploaded), or file:NAME from cmmd's models folder")->required();
+    c->add_option("MODEL", model,
+                  "mesh (.stl .ply .obj .off) or raw scan (.ply of points, .xyz, .asc, .pcd) to upload, or file:NAME "
+                  "from cmmd's models folder")
+        ->required();
     c->add_option("--scale", scale, "model units to mm");
+    c->add_option("--tolerance", scan.tolerance_mm, "raw scan: largest distance of the mesh from the scanned surface, mm")
+        ->check(CLI::PositiveNumber);
+    c->add_option("--bin-size", scan.bin_size_mm, "raw scan: thinning bin size, mm, instead of the one --tolerance gives")
+        ->check(CLI::PositiveNumber);
+    c->add_flag("--adaptive", scan.adaptive, "raw scan: bins follow the curvature (fewer points at the same tolerance)");
     c->add_option("--delta", delta, "bound on a reference point's error, mm (default: cmmd.json)");
     c->add_option("--spacing", spacing, "reference points every this many mm (default: cmmd.json)");
     c->add_option("--feature-angle", angle, "sharp-edge threshold, degrees (default: cmmd.json)");
@@ -233,7 +252,7 @@ int main(int argc, char** argv) {
         if (tty) std::fprintf(stderr, "\n");
       }
       CLI::App* c = command == "submit" ? submit : preview;
-      const json request = job_request(ref, *c, scale, delta, spacing, angle, seed, name, corners, measure);
+      const json request = job_request(ref, *c, scale, delta, spacing, angle, scan, seed, name, corners, measure);
       if (command == "preview") {
         show(client.call("plan.preview", request, 600));
         return 0;

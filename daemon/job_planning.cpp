@@ -13,9 +13,16 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const Job
   options.spacing = request.spacing_mm;
   options.feature_angle_deg = request.feature_angle_deg;
   options.cancel = cancel;
+  if (request.tolerance_mm) options.scan.tolerance_mm = *request.tolerance_mm;
+  options.scan.bin_size_mm = request.bin_size_mm;
+  options.scan.adaptive = request.adaptive;
+  options.scan.cancel = cancel;
   try {
     ReferenceModel m = planner::load_reference_model(file, travel_box, options);
     planner::settle_delta(m.inputs, request.delta_mm, "job request (or cmmd.json's job.delta_mm)", m.features);
+    if (!m.scan && (request.tolerance_mm || request.bin_size_mm || request.adaptive))
+      m.inputs.notes.push_back("tolerance_mm, bin_size_mm and adaptive apply to a raw scan; " + file.filename().string() +
+                               " is a mesh, planned on as it is");
     return m;
   } catch (const planner::ModelError& e) {
     nlohmann::json data = {{"file", e.file.string()}, {"kind", planner::to_string(e.kind)}};

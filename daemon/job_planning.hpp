@@ -20,9 +20,10 @@ namespace cmm::daemon {
 
 using planner::ReferenceModel;
 
-// planner::load_reference_model with the request's scale, spacing and angle (and its δ recorded for
-// the plan): a ModelError becomes RpcError model_error, data {"file", "kind"} (and "points",
-// "limit" for too many points); geometry::Cancelled when `cancel` asks.
+// planner::load_reference_model with the request's scale, spacing, angle and scan options (and its δ
+// recorded for the plan): a ModelError becomes RpcError model_error, data {"file", "kind"} (and
+// "points", "limit" for too many points); geometry::Cancelled when `cancel` asks, in the scan front
+// end too.
 ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
                                     const description::TravelBox& travel_box, const geometry::CancelCheck& cancel = {});
 

@@ -73,7 +73,8 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
     }
   };
   if (!f.expect_object()) refuse_if_problems();
-  f.known({"model", "name", "scale", "delta_mm", "spacing_mm", "feature_angle_deg", "seed", "requalify", "registration"});
+  f.known({"model", "name", "scale", "delta_mm", "spacing_mm", "feature_angle_deg", "tolerance_mm", "bin_size_mm",
+           "adaptive", "seed", "requalify", "registration"});
   if (f.require("model", "\"sha256:<hex>\" or \"file:<name>\"")) {
     r.model = f.text("model", "");
     if (params["model"].is_string() && r.model.rfind("sha256:", 0) != 0 && r.model.rfind("file:", 0) != 0)
@@ -86,6 +87,11 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   r.delta_mm = f.number("delta_mm", config.job.delta_mm, 0.001, 10);
   r.spacing_mm = f.number("spacing_mm", config.job.spacing_mm, 0.05, 100);
   r.feature_angle_deg = f.number("feature_angle_deg", config.job.feature_angle_deg, 1, 179);
+  // A micrometre to a centimetre: finer than a CMM resolves is no tolerance, and the front end's
+  // memory and time are bounded by the cloud's size whatever the bin size.
+  if (f.has("tolerance_mm")) r.tolerance_mm = f.number("tolerance_mm", 0.05, 0.001, 10);
+  if (f.has("bin_size_mm")) r.bin_size_mm = f.number("bin_size_mm", 0.05, 0.001, 10);
+  r.adaptive = f.flag("adaptive", false);
   r.seed = static_cast<std::uint64_t>(f.number("seed", 1, 0, 9007199254740992.0));
   r.requalify = f.flag("requalify", false);
   r.plate = config.plate;

@@ -28,6 +28,13 @@ struct JobRequest {
   double delta_mm = 0.2;
   double spacing_mm = 2;
   double feature_angle_deg = 30;
+  // For a raw scan (a model of points without faces, meshed by geometry::mesh_scan): ε, the mesh's
+  // largest distance from the scanned surface; a bin size overriding the one ε gives; bins that
+  // follow the curvature. Unset: geometry::ScanOptions' defaults. A mesh ignores them (the plan's
+  // notes say so when they were given).
+  std::optional<double> tolerance_mm;
+  std::optional<double> bin_size_mm;
+  bool adaptive = false;
   std::uint64_t seed = 1;
   // When the tip's qualification changed or vanished under the job (a controller restart): true,
   // the job qualifies the tip itself and goes on; false (the default), it pauses for the operator.

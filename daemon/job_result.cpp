@@ -65,6 +65,7 @@ nlohmann::json traceability(const JobResultInputs& in, double radius_mm) {
           {"driver", in.config.driver},
           {"model", in.request.model},
           {"model_file", in.model.inputs.model_file.string()},
+          {"reference_mesh", in.reference_mesh},
           {"tip", tip},
           {"seeds", {{"job", in.request.seed}, {"machine", in.config.machine.value("seed", nlohmann::json(nullptr))}}},
           {"started_utc", in.started_utc},

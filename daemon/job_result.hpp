@@ -37,6 +37,8 @@ struct JobResultInputs {
   double machine_time_s = 0;   // machine clock from registering to the end of the program, this run
   double probing_time_s = 0;   // of which the probing, to hold against the plan's estimate
   std::string version;         // cmmd's
+  // Where the mesh the job planned on came from (JobReference::provenance); null when not known.
+  nlohmann::json reference_mesh = nullptr;
   std::string started_utc, finished_utc;
 };
 

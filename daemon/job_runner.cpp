@@ -69,6 +69,7 @@ void JobRunner::run(bool rehome, bool reregister) {
                                  .machine_time_s = env_.machine.cmm().status().t_s - clock0_s,
                                  .probing_time_s = touches.probing_time_s,
                                  .version = env_.version,
+                                 .reference_mesh = reference_mesh_,
                                  .started_utc = started,
                                  .finished_utc = hal::utc_now()};
     sink_.state(JobState::done, write_job_result(env_.store, id_, inputs), std::nullopt);
@@ -97,11 +98,14 @@ void JobRunner::check_control() const {
 
 // --- model
 
-// Planning a large model takes a while: a cancel or a shutdown ends it at its next step.
+// Planning a large model (or meshing a scan) takes a while: a cancel or a shutdown ends it at its next
+// step. The first run stores the mesh it planned on; every later run plans on that (job_reference.hpp).
 ReferenceModel JobRunner::load_model() {
   const geometry::CancelCheck cancel{[this] { return control_.cancel || control_.shutdown; }};
-  return load_reference_model(env_.models.resolve(request_.model), request_, env_.config.description.travel_box,
-                              cancel);
+  JobReference reference =
+      job_reference(env_.store, id_, env_.models, request_, env_.config.description.travel_box, cancel);
+  reference_mesh_ = std::move(reference.provenance);
+  return std::move(reference.model);
 }
 
 // --- machine
@@ -294,9 +298,11 @@ planner::MeasurementPlan JobRunner::plan(const ReferenceModel& model, const JobR
                                          const description::MachineDescription& machine) {
   const geometry::CancelCheck cancel{[this] { return control_.cancel || control_.shutdown; }};
   planner::MeasurementPlan plan = plan_job(model, registration.T_M_S, machine, cancel);
-  if (!env_.store.read(id_, JobFile::plan))
-    env_.store.write(id_, JobFile::plan,
-                     planner::plan_json(model.features, model.inputs, &plan, &machine, registration.fit).dump(1) + "\n");
+  if (!env_.store.read(id_, JobFile::plan)) {
+    nlohmann::json file = planner::plan_json(model.features, model.inputs, &plan, &machine, registration.fit);
+    file["model"]["reference_mesh"] = reference_mesh_;
+    env_.store.write(id_, JobFile::plan, file.dump(1) + "\n");
+  }
   return plan;
 }
 

@@ -1,5 +1,6 @@
 // One job's run on the machine, in stages — model, machine, tip, registration, plan, probing,
-// result — resumable at any point from its folder's files (JobStore): registration.json keeps T_M_S
+// result — resumable at any point from its folder's files (JobStore): reference.ply keeps the mesh
+// the job plans on (job_reference.hpp), registration.json keeps T_M_S
 // and the radius the plan is made for, touches.jsonl every touch, qualifications.json the tip's
 // qualifications. How a run that does not end done ends is ending_of()'s one mapping.
 #pragma once
@@ -16,6 +17,7 @@
 #include "daemon/job_ending.hpp"
 #include "daemon/job_planning.hpp"
 #include "daemon/job_record.hpp"
+#include "daemon/job_reference.hpp"
 #include "daemon/job_registration.hpp"
 #include "daemon/job_request.hpp"
 #include "daemon/job_store.hpp"
@@ -99,6 +101,8 @@ class JobRunner {
   // Touches made but not journalled (the journal could not be written): journalled first when the
   // job goes on, so a full disk loses no touch and makes none twice.
   std::vector<JournalEntry> unjournaled_;
+  // Where this run's reference mesh came from (JobReference::provenance), for plan.json and the result.
+  nlohmann::json reference_mesh_;
 };
 
 }  // namespace cmm::daemon

@@ -130,6 +130,8 @@ void save_recovered(const fs::path& dir, const JobRecord& record) {
 
 const char* file_name(JobFile file) {
   switch (file) {
+    case JobFile::reference_mesh: return "reference.ply";
+    case JobFile::reference_info: return "reference.json";
     case JobFile::plan: return "plan.json";
     case JobFile::registration: return "registration.json";
     case JobFile::touches: return "touches.jsonl";

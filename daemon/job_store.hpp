@@ -18,6 +18,8 @@ namespace cmm::daemon {
 
 // The files a job's run leaves in its folder (docs/result.md, Files).
 enum class JobFile {
+  reference_mesh,  // reference.ply: the mesh the job plans on (daemon/job_reference.hpp)
+  reference_info,  // reference.json: where that mesh came from, and its sha256
   plan,            // plan.json
   registration,    // registration.json: T_M_S and the tip and radius the plan is made for
   touches,         // touches.jsonl: the journal

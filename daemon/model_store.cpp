@@ -3,7 +3,6 @@
 #include "daemon/model_store.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cctype>
 #include <cerrno>
 #include <vector>
@@ -14,13 +13,31 @@
 #include "daemon/client/sha256.hpp"
 #include "daemon/storage_error.hpp"
 #include "geometry/file_error.hpp"
+#include "geometry/mesh_io.hpp"
 
 namespace cmm::daemon {
 
 namespace fs = std::filesystem;
 
 namespace {
-constexpr std::array<const char*, 4> mesh_extensions = {".stl", ".ply", ".obj", ".off"};
+
+// What geometry::read_model reads: meshes and raw scans (point clouds) alike.
+const std::vector<std::string>& model_extensions() {
+  static const std::vector<std::string> extensions = geometry::model_extensions();
+  return extensions;
+}
+
+bool known_extension(const std::string& ext) {
+  return std::find(model_extensions().begin(), model_extensions().end(), ext) != model_extensions().end();
+}
+
+// ".stl, .ply, ... or .pcd", for the messages.
+std::string extension_list() {
+  const auto& all = model_extensions();
+  std::string list;
+  for (std::size_t i = 0; i < all.size(); ++i) list += (i == 0 ? "" : i + 1 == all.size() ? " or " : ", ") + all[i];
+  return list;
+}
 
 RpcError upload_failed(const std::string& message, std::uint64_t expected_offset) {
   return RpcError(rpc_code::upload_error, message, {{"expected_offset", expected_offset}});
@@ -31,10 +48,11 @@ std::string lowercase(std::string text) {
   return text;
 }
 
-std::string mesh_extension(const std::string& name) {
+std::string model_extension(const std::string& name) {
   const std::string ext = lowercase(fs::path(name).extension().string());
-  if (std::find(mesh_extensions.begin(), mesh_extensions.end(), ext) == mesh_extensions.end())
-    throw_invalid_param("/name", "\"" + name + "\" is not a mesh file (expected .stl, .ply, .obj or .off)");
+  if (!known_extension(ext))
+    throw_invalid_param("/name", "\"" + name + "\" is not a model file (expected a mesh or a point cloud: " +
+                                     extension_list() + ")");
   return ext;
 }
 
@@ -61,7 +79,7 @@ fs::path ModelStore::stored_file(const std::string& sha256_hex, const std::strin
 
 std::vector<std::string> ModelStore::stored_extensions(const std::string& sha256_hex) const {
   std::vector<std::string> found;
-  for (const char* ext : mesh_extensions)
+  for (const std::string& ext : model_extensions())
     if (!stored_file(sha256_hex, ext).empty()) found.push_back(ext);
   return found;
 }
@@ -69,11 +87,12 @@ std::vector<std::string> ModelStore::stored_extensions(const std::string& sha256
 UploadStatus ModelStore::upload(const UploadChunk& chunk) {
   const std::string sha = lowercase(chunk.sha256_hex);
   if (!is_sha256_hex(sha)) throw_invalid_param("/sha256", "sha256 must be 64 hex digits, got \"" + chunk.sha256_hex + "\"");
-  const std::string ext = mesh_extension(chunk.name);
+  const std::string ext = model_extension(chunk.name);
   const std::string model = "sha256:" + sha + ext;
   if (chunk.size > max_model_bytes_)
     throw upload_failed("model of " + std::to_string(chunk.size) + " bytes is over the limit of " +
-                            std::to_string(max_model_bytes_) + " bytes",
+                            std::to_string(max_model_bytes_) + " bytes (" + std::to_string(max_model_bytes_ >> 20) +
+                            " MiB)",
                         0);
   std::string bytes;
   try {
@@ -145,8 +164,8 @@ fs::path ModelStore::resolve(const std::string& ref) const {
     const std::string ext = name.substr(sha.size());
     if (!is_sha256_hex(sha)) throw_invalid_param("/model", "\"" + ref + "\": sha256 must be 64 hex digits");
     if (!ext.empty()) {
-      if (std::find(mesh_extensions.begin(), mesh_extensions.end(), ext) == mesh_extensions.end())
-        throw_invalid_param("/model", "\"" + ref + "\": after the digest only .stl, .ply, .obj or .off may follow");
+      if (!known_extension(ext))
+        throw_invalid_param("/model", "\"" + ref + "\": after the digest only " + extension_list() + " may follow");
       const fs::path file = stored_file(sha, ext);
       if (file.empty()) throw RpcError(rpc_code::not_found, "no uploaded model " + ref, {{"model", ref}});
       return file;

@@ -12,7 +12,7 @@ namespace cmm::daemon {
 
 // One model.upload call's params (docs/api.md).
 struct UploadChunk {
-  std::string name;        // the client's file name; only its extension is used (.stl .ply .obj .off)
+  std::string name;        // the client's file name; only its extension is used (geometry::model_extensions)
   std::uint64_t size = 0;  // bytes of the whole model
   std::string sha256_hex;  // of the whole model
   std::uint64_t offset = 0;
@@ -28,7 +28,10 @@ struct UploadStatus {
 
 class ModelStore {
  public:
-  static constexpr std::uint64_t default_max_model_bytes = std::uint64_t{512} << 20;
+  // 1 GiB: a raw scan is far larger than its mesh. ScanOptions::max_points (20 million points) is
+  // 480 MB as binary PLY or PCD of float64 x y z (960 MB with normals, 240/480 MB as float32), and
+  // about 0.6 to 0.9 GB as XYZ text; a 5,000,000-face mesh (the model limits) is 250 MB of binary STL.
+  static constexpr std::uint64_t default_max_model_bytes = std::uint64_t{1} << 30;
 
   // `state_models_dir` is created if missing; `models_dir` is the configured read-only folder of
   // "file:" models (empty: none configured).

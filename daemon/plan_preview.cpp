@@ -1,12 +1,18 @@
 // plan.preview: plan a request and dry-run its program on a simulator of the reference mesh.
 #include "daemon/plan_preview.hpp"
 
+#include <unistd.h>
+
+#include <atomic>
 #include <numbers>
+#include <optional>
 
 #include "daemon/job_planning.hpp"
+#include "daemon/job_reference.hpp"
 #include "daemon/client/rpc_error.hpp"
 #include "daemon/driver_factory.hpp"
 #include "daemon/touch_motion.hpp"
+#include "geometry/mesh_io.hpp"
 #include "hal/description/eigen_json.hpp"
 #include "hal/fault.hpp"
 #include "planner/rigid_fit.hpp"
@@ -39,8 +45,31 @@ Eigen::Isometry3d preview_registration(const JobRequest& request, std::vector<st
   return Eigen::Isometry3d::Identity();
 }
 
+// The simulator reads its part from a mesh file. A raw scan's part is the mesh the front end made of
+// it, written to a private temporary file (cmmd's unit has PrivateTmp) for the dry run and removed after.
+class MeshedScanFile {
+ public:
+  explicit MeshedScanFile(const geometry::TriangleMesh& mesh) {
+    static std::atomic<unsigned> next{0};
+    path_ = std::filesystem::temp_directory_path() /
+            ("cmmd-preview-" + std::to_string(::getpid()) + "-" + std::to_string(next++) + ".ply");
+    geometry::write_mesh(path_, mesh);
+  }
+  ~MeshedScanFile() {
+    std::error_code ignored;
+    std::filesystem::remove(path_, ignored);
+  }
+  MeshedScanFile(const MeshedScanFile&) = delete;
+  MeshedScanFile& operator=(const MeshedScanFile&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
 // The simulator's block: the reference mesh standing where T_M_S puts it, on a plate under it.
-nlohmann::json sim_block(const std::filesystem::path& model_file, const JobRequest& request,
+// `part_file` at `part_scale` is that mesh.
+nlohmann::json sim_block(const std::filesystem::path& part_file, double part_scale, const JobRequest& request,
                          const description::MachineDescription& machine, const geometry::TriangleMesh& mesh,
                          const Eigen::Isometry3d& T_M_S) {
   const Eigen::Vector3d lo = mesh.vertices.colwise().minCoeff().transpose();
@@ -55,7 +84,7 @@ nlohmann::json sim_block(const std::filesystem::path& model_file, const JobReque
   return {{"machine", description::to_json(machine)},
           {"plate", description::to_json(plate)},
           {"plate_pose", pose_json(T_M_S * T_S_P)},
-          {"part", {{"mesh", model_file.string()}, {"scale", request.scale}}},
+          {"part", {{"mesh", part_file.string()}, {"scale", part_scale}}},
           {"part_pose", pose_json(T_S_P.inverse())},
           {"trigger_sigma_mm", 0},
           {"home_position", description::vec3_json(machine.travel_box.max)}};
@@ -85,7 +114,10 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
 
   const std::unique_ptr<hal::Cmm> simulator = make_simulator(".");
   hal::Cmm& cmm = *simulator;
-  cmm.configure(sim_block(model_file, request, machine, model.mesh, T_M_S));
+  std::optional<MeshedScanFile> meshed;
+  if (model.scan) meshed.emplace(model.mesh);
+  cmm.configure(meshed ? sim_block(meshed->path(), 1, request, machine, model.mesh, T_M_S)
+                       : sim_block(model_file, request.scale, request, machine, model.mesh, T_M_S));
   cmm.connect();
   cmm.enable();
   cmm.home();
@@ -122,7 +154,11 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
   std::size_t measured_by_plan = 0;
   for (const planner::EdgePlan& e : plan.edges) measured_by_plan += e.method != planner::EdgeMethod::none;
   for (const std::string& n : plan.notes) notes.push_back(n);
-  return {{"features",
+  return {{"reference_mesh",
+           {{"vertices", model.mesh.vertices.rows()},
+            {"faces", model.mesh.faces.rows()},
+            {"scan", model.scan ? scan_report_json(*model.scan) : nlohmann::json(nullptr)}}},
+          {"features",
            {{"edge_points", model.features.points.size()},
             {"probeable", measured_by_plan},
             {"convex", probeable},

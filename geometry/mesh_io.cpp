@@ -21,6 +21,7 @@
 #include "geometry/mesh_cleanup.hpp"
 #include "geometry/obj_io.hpp"
 #include "geometry/off_io.hpp"
+#include "geometry/pcd_io.hpp"
 #include "geometry/ply_io.hpp"
 #include "geometry/stl_io.hpp"
 #include "geometry/text_io.hpp"
@@ -44,6 +45,8 @@ constexpr Format formats[] = {
     {".obj", read_obj, write_obj, write_obj},
     {".off", read_off, write_off, write_off},
     {".xyz", read_xyz, nullptr, write_xyz},
+    {".asc", read_xyz, nullptr, write_xyz},  // the same text under the name many scanners export it as
+    {".pcd", read_pcd, nullptr, [](std::ostream& out, const PointCloud& cloud) { write_pcd(out, cloud); }},
 };
 
 const Format& format_of(const std::filesystem::path& file) {
@@ -53,7 +56,7 @@ const Format& format_of(const std::filesystem::path& file) {
     if (format.extension == extension) return format;
   }
   throw FileError::whole(file,
-                         "unknown extension " + in_quotes(extension) + "; expected .stl, .ply, .obj, .off or .xyz");
+                         "unknown extension " + in_quotes(extension) + "; expected .stl, .ply, .obj, .off, .xyz, .asc or .pcd");
 }
 
 // The file mapped read-only and pre-faulted: no copy, and no zero-filled buffer to write first.
@@ -102,6 +105,12 @@ void write_file(const std::filesystem::path& file, const std::function<void(std:
 
 }  // namespace
 
+std::vector<std::string> model_extensions() {
+  std::vector<std::string> extensions;
+  for (const Format& format : formats) extensions.emplace_back(format.extension);
+  return extensions;
+}
+
 ReadResult read_model(const std::filesystem::path& file) {
   const Format& format = format_of(file);
   const MappedFile mapped(file);
@@ -134,7 +143,7 @@ void write_cloud(const std::filesystem::path& file, const PointCloud& cloud) {
   const Format& format = format_of(file);
   if (format.write_cloud == nullptr) {
     throw FileError::whole(
-        file, in_quotes(format.extension) + " holds triangles only, not a point cloud; use .ply, .obj, .off or .xyz");
+        file, in_quotes(format.extension) + " holds triangles only, not a point cloud; use .ply, .obj, .off, .xyz, .asc or .pcd");
   }
   write_file(file, [&](std::ostream& out) { format.write_cloud(out, cloud); });
 }

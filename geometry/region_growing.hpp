@@ -1,6 +1,6 @@
 // Region-growing triangulation of a thinned scan (thesis Ch. 4, §4.2–4.3), with the creases joined:
-// growth stops where a new facet would fold across a sharp edge, and the two faces then share the
-// crease as a mesh edge, so boundary loops are left only at the real openings of the scan.
+// points put on each sharp edge (crease_points) are vertices of both faces, no facet straddles the
+// edge, and the two faces share it as mesh edges, so boundary loops are left only at the real openings.
 #pragma once
 
 #include <cstddef>
@@ -18,6 +18,11 @@ struct RegionGrowingOptions {
   double bin_mm = 1;               // the thinning's bin size B: the search reaches the 26 bins around an edge's ends
   double min_angle_deg = 10;       // thesis §4.2.2 (2): no facet angle below this
   double crease_angle_deg = 30;    // a facet that turns more than this from its neighbour folds across a crease
+  double fold_angle_deg = 45;      // §4.2.2 (3): largest turn between neighbouring facets off the creases
+  double max_edge_bins = 2.5;      // no edge longer than this many bins (√3 B spans neighbouring bins)
+  // Thinned points closer than this many bins to one kept before them are left out: a noisy surface
+  // puts points in bins stacked across it, and such pairs would only make slivers and folds.
+  double min_spacing_bins = 0.5;
   CancelCheck cancel;
 };
 
@@ -27,12 +32,23 @@ struct ScanLoop {
   double perimeter_mm = 0;
 };
 
+struct CreaseLine {
+  std::vector<int> vertices;  // mesh vertices along the crease; consecutive ones share a mesh edge
+  bool closed = false;
+};
+
 struct Triangulation {
-  TriangleMesh mesh;  // vertices: the thinned points first, in order, then the crease points added
+  // vertices: the thinned points the facets use, in order, then the crease points they use. Thinned
+  // points in a crease's band (within B/2 of it) and crowded ones (min_spacing_bins) are left out.
+  TriangleMesh mesh;
+  std::vector<int> thinned_index;  // per mesh vertex: its row in `thinned`, or −1 for a crease point
   std::vector<ScanLoop> loops;
+  std::vector<CreaseLine> crease_lines;
   std::size_t components = 0;
   std::size_t creases = 0;        // crease polylines joined
   std::size_t crease_points = 0;  // vertices added on them
+  std::size_t seeds = 0;          // seed triangles the growth started from
+  std::size_t pinched_vertices = 0;  // vertices on two boundary fans (edge-manifold, not vertex-manifold)
 };
 
 // `thinned`: the kept points; `raw`, `raw_fits`, `raw_index`: the whole (outlier-free) cloud and its

@@ -16,6 +16,7 @@
 #include "geometry/atomic_file.hpp"
 #include "geometry/feature_model.hpp"
 #include "geometry/file_error.hpp"
+#include "geometry/mesh_io.hpp"
 #include "hal/description/json_fields.hpp"
 #include "hal/description/machine_description.hpp"
 #include "hal/description/plate.hpp"
@@ -42,7 +43,9 @@ struct StageTimes {
 };
 
 struct Options {
-  std::string model, output, machine, plate, registration, dmis;
+  std::string model, output, machine, plate, registration, dmis, emit_mesh;
+  geometry::ScanOptions scan;
+  double bin_size = 0;
   planner::PlanInputs inputs;
   bool radius_given = false;
 };
@@ -106,6 +109,20 @@ void print_summary(const Options& o, const StageTimes& times, const geometry::Fe
   }
   std::printf("model      %s: %zu vertices, %zu triangles (scale %g)\n", o.model.c_str(), in.vertex_count,
               in.face_count, in.scale);
+  if (in.scan) {
+    const geometry::ScanReport& s = *in.scan;
+    std::printf("scan       %zu points in, %zu outliers removed, noise sigma %.4f mm (from the local fits' residuals)\n",
+                s.points_in, s.outliers_removed, s.noise_sigma_mm);
+    std::printf("thin       bin %.4f mm: %s; %zu points kept%s\n", s.bin_size_mm, s.bin_size_source.c_str(), s.points_kept,
+                in.scan_options && in.scan_options->adaptive ? " (adaptive bins)" : "");
+    std::printf("mesh       %zu triangles, %zu component(s), %zu outer and %zu hole loop(s), %zu crease(s) joined with %zu "
+                "points on them%s%s\n",
+                s.triangles, s.components, s.outer_loops, s.hole_loops, s.creases, s.crease_points,
+                o.emit_mesh.empty() ? "" : ", written to ", o.emit_mesh.c_str());
+    std::printf("scan time ");
+    for (const geometry::ScanStageTime& t : s.times) std::printf(" %s %.3f s", t.stage.c_str(), t.seconds);
+    std::printf("\n");
+  }
   std::printf("read       %zu vertices welded, %zu degenerate and %zu duplicate faces dropped\n", read.vertices_welded,
               read.degenerate_faces_dropped, read.duplicate_faces_dropped);
   std::printf("topology   %d component(s), %s, %zu boundary edges in %zu loops, %zu non-manifold edges%s\n",
@@ -174,6 +191,7 @@ int plan(Options o) {
   model_options.scale = inputs.scale;
   model_options.spacing = inputs.spacing;
   model_options.feature_angle_deg = inputs.feature_angle_deg;
+  model_options.scan = o.scan;
   planner::ReferenceModel reference = planner::load_reference_model(o.model, machine.travel_box, model_options);
   reference.inputs.probe_radius = inputs.probe_radius;
   planner::settle_delta(reference.inputs, inputs.delta, inputs.delta_source, reference.features);
@@ -182,6 +200,13 @@ int plan(Options o) {
   const geometry::TriangleMesh& mesh = reference.mesh;
   const geometry::FeatureModel& model = reference.features;
   times.done("model");
+  if (!o.emit_mesh.empty()) {
+    try {
+      geometry::write_mesh(o.emit_mesh, mesh);
+    } catch (const geometry::FileError& e) {
+      throw WriteError(std::string("cannot write ") + e.what());
+    }
+  }
 
   std::optional<planner::RegistrationResult> registration;
   Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
@@ -223,7 +248,11 @@ int main(int argc, char** argv) {
   CLI::App app{"cmm-plan: plan the CMM re-measurement of a scanned part's edges and holes (no machine)"};
   Options o;
   planner::PlanInputs& inputs = o.inputs;
-  app.add_option("MODEL", o.model, "reference mesh: STL, PLY, OBJ or OFF")->required()->check(CLI::ExistingFile);
+  app.add_option("MODEL", o.model,
+                 "reference mesh (STL, PLY, OBJ, OFF) or raw scan (points only: PLY, XYZ/ASC, PCD), thinned and "
+                 "triangulated first")
+      ->required()
+      ->check(CLI::ExistingFile);
   app.add_option("-o,--output", o.output, "plan JSON to write")->required();
   app.add_option("--scale", inputs.scale, "multiply coordinates by this (unitless models to mm)")
       ->check(CLI::PositiveNumber);
@@ -242,7 +271,16 @@ int main(int argc, char** argv) {
   app.add_option("--plate", o.plate, "plate description; overrides the one named in the registration file")
       ->check(CLI::ExistingFile);
   app.add_option("--dmis", o.dmis, "also write the move program as DMIS (docs/dmis.md)");
+  auto* tolerance = app.add_option("--tolerance", o.scan.tolerance_mm,
+                                   "raw scan: the mesh's largest distance from the scanned surface (epsilon), mm")
+                        ->check(CLI::PositiveNumber);
+  app.add_option("--bin-size", o.bin_size, "raw scan: thinning bin size, mm, instead of the one the tolerance gives")
+      ->check(CLI::PositiveNumber)
+      ->excludes(tolerance);
+  app.add_flag("--adaptive", o.scan.adaptive, "raw scan: bins follow the curvature (fewer points at the same tolerance)");
+  app.add_option("--emit-mesh", o.emit_mesh, "also write the mesh the plan was made on (STL, PLY, OBJ, OFF)");
   CLI11_PARSE(app, argc, argv);
+  if (o.bin_size > 0) o.scan.bin_size_mm = o.bin_size;
   if (!o.plate.empty() && o.registration.empty()) {
     std::cerr << "cmm-plan: --plate checks a corner fit and needs --registration corners.json\n";
     return 2;

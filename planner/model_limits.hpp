@@ -18,6 +18,9 @@ struct ModelLimits {
   std::size_t max_vertices = 5'000'000;
   std::size_t max_faces = 5'000'000;
   std::size_t max_edge_points = 20'000;  // for geometry::FeatureModelOptions::max_points
+  // A raw scan's points before thinning: the front end holds a local fit per point (about 300 bytes
+  // with its index), so 10,000,000 points peak near 3 GB; a larger scan should be thinned first.
+  std::size_t max_scan_points = 10'000'000;
 };
 
 // Refused: what() says why, naming the file and, for a size, the vertex farthest from the rest.

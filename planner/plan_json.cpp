@@ -129,6 +129,32 @@ PlanSummary plan_summary_from_json(const json& plan) {
 
 namespace {
 
+// How a raw scan became the mesh: the options and every stage's figures (null for a mesh).
+json scan_json(const PlanInputs& inputs) {
+  if (!inputs.scan || !inputs.scan_options) return nullptr;
+  const geometry::ScanReport& r = *inputs.scan;
+  const geometry::ScanOptions& o = *inputs.scan_options;
+  json times = json::object();
+  for (const geometry::ScanStageTime& t : r.times) times[t.stage] = t.seconds;
+  return {{"tolerance_mm", o.tolerance_mm},
+          {"bin_size_given_mm", o.bin_size_mm ? json(*o.bin_size_mm) : json(nullptr)},
+          {"adaptive", o.adaptive},
+          {"neighbours", o.neighbours},
+          {"points_in", r.points_in},
+          {"outliers_removed", r.outliers_removed},
+          {"noise_sigma_mm", r.noise_sigma_mm},
+          {"bin_size_mm", r.bin_size_mm},
+          {"bin_size_source", r.bin_size_source},
+          {"points_kept", r.points_kept},
+          {"triangles", r.triangles},
+          {"components", r.components},
+          {"outer_loops", r.outer_loops},
+          {"hole_loops", r.hole_loops},
+          {"creases", r.creases},
+          {"crease_points", r.crease_points},
+          {"stage_seconds", times}};
+}
+
 double max_mesh_deviation(const geometry::FeatureModel& model) {
   double most = 0;
   for (const auto& p : model.points) most = std::max(most, p.mesh_deviation_mm);
@@ -161,6 +187,7 @@ json plan_json(const geometry::FeatureModel& model, const PlanInputs& inputs, co
           {"inconsistently_oriented_edges", t.inconsistently_oriented_edges},
           {"euler_characteristic", t.euler_characteristic},
           {"boundary_loops", model.loops.size()}}},
+        {"scan", scan_json(inputs)},
         {"noise",
          {{"sigma_mm", model.features.noise.sigma_mm},
           {"vertices_measured", model.features.noise.measured},

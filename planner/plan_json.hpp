@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 
 #include "geometry/feature_model.hpp"
 #include "geometry/mesh_io.hpp"
+#include "geometry/scan_front_end.hpp"
 #include "planner/measurement_plan.hpp"
 
 namespace cmm::planner {
@@ -30,6 +32,9 @@ struct PlanInputs {
   geometry::ReadReport read_report;
   std::size_t vertex_count = 0, face_count = 0;
   std::vector<std::string> notes;
+  // A raw scan: the options it was meshed with and what each stage did; empty for a mesh.
+  std::optional<geometry::ScanOptions> scan_options;
+  std::optional<geometry::ScanReport> scan;
 };
 
 nlohmann::json to_json(const geometry::EdgePoint& point);

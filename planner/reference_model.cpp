@@ -33,16 +33,29 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const des
   } catch (const std::exception& e) {  // FileError names the file and the line or byte
     throw ModelError(Kind::unreadable, file, e.what());
   }
-  if (const auto* cloud = std::get_if<geometry::PointCloud>(&read.model))
-    throw ModelError(Kind::scan, file,
-                     name + " holds a point cloud (" + std::to_string(cloud->points.rows()) +
-                         " points, no faces). Meshing a raw scan (thinning and triangulation, thesis Ch. 3-4) is not "
-                         "built yet: give a triangle mesh (STL, PLY, OBJ or OFF).");
   ReferenceModel m;
-  m.mesh = std::get<geometry::TriangleMesh>(std::move(read.model));
-  if (m.mesh.faces.rows() == 0)
-    throw ModelError(Kind::empty, file, name + ": no usable triangles left after dropping degenerate ones");
-  m.mesh.vertices *= options.scale;
+  if (auto* cloud = std::get_if<geometry::PointCloud>(&read.model)) {
+    // A raw scan: scaled to mm first, so that the tolerance and the bin size are in mm.
+    cloud->points *= options.scale;
+    geometry::ScanOptions scan = options.scan;
+    scan.max_points = std::min(scan.max_points, options.limits.max_scan_points);
+    scan.cancel = options.cancel;
+    geometry::ScanMesh meshed;
+    try {
+      meshed = geometry::mesh_scan(*cloud, name, scan);
+    } catch (const geometry::ScanError& e) {
+      throw ModelError(Kind::scan, file, e.what());
+    }
+    m.mesh = std::move(meshed.mesh);
+    m.scan = meshed.report;
+    m.inputs.scan = meshed.report;
+    m.inputs.scan_options = scan;
+  } else {
+    m.mesh = std::get<geometry::TriangleMesh>(std::move(read.model));
+    if (m.mesh.faces.rows() == 0)
+      throw ModelError(Kind::empty, file, name + ": no usable triangles left after dropping degenerate ones");
+    m.mesh.vertices *= options.scale;
+  }
   std::ostringstream source;
   source << name << " (scale " << options.scale << ")";
   if (!m.mesh.vertices.allFinite())
@@ -84,6 +97,9 @@ void settle_delta(PlanInputs& inputs, double given, const std::string& source, c
   inputs.delta_source = source + "; the mesh's vertex noise sigma " + fixed(sigma * 1e3, 1) + " um on " +
                         std::to_string(model.features.noise.measured) + " vertices, " + fixed(point * 1e3, 1) +
                         " um on a typical reference point" + (3 * point > given ? ", so delta is raised to 3 of those" : ", within it") +
+                        (inputs.scan ? "; the raw scan's own noise sigma " + fixed(inputs.scan->noise_sigma_mm * 1e3, 1) +
+                                           " um (its local fits' residuals)"
+                                     : std::string()) +
                         "; a point smoothed less raises its own to 3 of its position_sigma_mm, and each adds the mesh's own "
                         "distance from its edge (mesh_deviation_mm)";
 }

@@ -14,6 +14,7 @@
 #include <memory>
 #include <set>
 
+#include "daemon/client/sha256.hpp"
 #include "daemon/driver_factory.hpp"
 #include "fresh_folder.hpp"
 #include "geometry/analytic_parts.hpp"
@@ -423,6 +424,93 @@ TEST_F(JobRunnerTest, InterruptedByShutdownResumesAfterRehoming) {
   EXPECT_EQ(run(true), JobState::done) << reason_;
   EXPECT_EQ(recorder_->commands[before].kind, RecordedCommand::Kind::home) << "an interrupted job homes first";
   expect_every_touch_once();
+}
+
+// --- the stored reference mesh
+
+TEST_F(JobRunnerTest, TheMeshPlannedOnIsStoredWithWhereItCameFrom) {
+  start();
+  ASSERT_EQ(run(), JobState::done) << reason_;
+  const geometry::TriangleMesh stored = geometry::read_mesh(store_->path(id_, JobFile::reference_mesh));
+  const geometry::TriangleMesh model = geometry::read_mesh(dir_ / "models" / "part.ply");
+  EXPECT_EQ(stored.vertices, model.vertices);
+  EXPECT_EQ(stored.faces, model.faces);
+  const json info = file(JobFile::reference_info);
+  EXPECT_EQ(info.at("mesh"), "reference.ply");
+  EXPECT_EQ(info.at("model"), "file:part.ply");
+  EXPECT_EQ(info.at("model_file"), std::filesystem::canonical(dir_ / "models" / "part.ply").string());
+  EXPECT_EQ(info.at("scan"), nullptr) << "a mesh model is no scan";
+  EXPECT_EQ(info.at("sha256"), sha256_hex_of_file(store_->path(id_, JobFile::reference_mesh)));
+  const json from_plan = file(JobFile::plan).at("model").at("reference_mesh");
+  EXPECT_EQ(from_plan.at("planned_on"), "model");
+  EXPECT_EQ(from_plan.at("sha256"), info.at("sha256"));
+  EXPECT_EQ(file(JobFile::result).at("traceability").at("reference_mesh").at("planned_on"), "model");
+}
+
+// The model file is replaced by another part (scaled by 1.2) while the job is interrupted: the
+// resumed job plans on the mesh it stored, so the plan it makes again (reregister drops plan.json and
+// writes it anew) is the first plan, edge point for edge point and touch for touch.
+TEST_F(JobRunnerTest, AResumedJobPlansOnItsStoredMeshNotOnAChangedModelFile) {
+  start();
+  after_touch_ = [this](int made) {
+    if (made == 3) control_.shutdown = true;
+  };
+  ASSERT_EQ(run(), JobState::interrupted);
+  after_touch_ = nullptr;
+  const json first = file(JobFile::plan);
+  geometry::TriangleMesh other = geometry::make_case3_block(2).mesh;
+  other.vertices *= 1.2;
+  geometry::write_mesh(dir_ / "models" / "part.ply", other);
+
+  ASSERT_EQ(run(true, true), JobState::done) << reason_;
+  const json again = file(JobFile::plan);
+  EXPECT_EQ(again.at("model").at("reference_mesh").at("planned_on"), "stored_mesh");
+  EXPECT_EQ(again.at("model").at("scale"), 1);
+  EXPECT_EQ(again.at("model").at("file"), store_->path(id_, JobFile::reference_mesh).string());
+  ASSERT_EQ(again.at("edge_points").size(), first.at("edge_points").size());
+  EXPECT_EQ(again.at("edge_points"), first.at("edge_points"));
+  EXPECT_EQ(again.at("holes"), first.at("holes"));
+  EXPECT_EQ(again.at("program"), first.at("program"));
+  EXPECT_EQ(again.at("motions"), first.at("motions"));
+  expect_every_touch_once();
+  const json trace = file(JobFile::result).at("traceability").at("reference_mesh");
+  EXPECT_EQ(trace.at("planned_on"), "stored_mesh");
+  EXPECT_EQ(trace.at("model"), "file:part.ply");
+
+  // And the changed file would have given another plan: a new job on it plans other edge points.
+  const JobReference fresh = job_reference(*store_, store_->create(json::object(), "other", "file:part.ply").id,
+                                           *models_, *request_, config_->description.travel_box);
+  EXPECT_EQ(fresh.provenance.at("planned_on"), "model");
+  EXPECT_NE(fresh.model.mesh.vertices, geometry::read_mesh(store_->path(id_, JobFile::reference_mesh)).vertices);
+}
+
+TEST_F(JobRunnerTest, AResumeWithoutTheModelFileStillPlans) {
+  start();
+  after_touch_ = [this](int made) {
+    if (made == 2) control_.pause = true;
+  };
+  ASSERT_EQ(run(), JobState::paused);
+  after_touch_ = nullptr;
+  std::filesystem::remove(dir_ / "models" / "part.ply");
+  ASSERT_EQ(run(), JobState::done) << reason_;
+  expect_every_touch_once();
+}
+
+TEST_F(JobRunnerTest, AResumeRefusesAStoredMeshThatChanged) {
+  start();
+  after_touch_ = [this](int made) {
+    if (made == 2) control_.pause = true;
+  };
+  ASSERT_EQ(run(), JobState::paused);
+  after_touch_ = nullptr;
+  std::string bytes = *store_->read(id_, JobFile::reference_mesh);
+  bytes[bytes.size() - 5] ^= 1;  // a bit of the last face's corner index
+  store_->write(id_, JobFile::reference_mesh, bytes);
+  EXPECT_EQ(run(), JobState::failed);
+  EXPECT_THAT(reason_, HasSubstr("stored reference mesh " + store_->path(id_, JobFile::reference_mesh).string() +
+                                 " hashes to"));
+  EXPECT_THAT(reason_, HasSubstr("not the mesh the job was planned on"));
+  EXPECT_EQ(journal().size(), 2u) << "no touch on a mesh that is not the plan's";
 }
 
 }  // namespace

@@ -226,6 +226,38 @@ TEST(ModelStore, RefusesBadBase64BadNamesBadDigestsAndOversizedModels) {
   EXPECT_EQ(files_in(dir / "models" / ".partial"), 0u);
 }
 
+// Raw scans are models too: every cloud format read_model knows is taken and named by its extension.
+TEST(ModelStore, TakesPointCloudFormats) {
+  const fs::path dir = fresh_folder("models-clouds");
+  ModelStore store(dir / "models", "");
+  const std::string bytes = "1 2 3\n4 5 6\n7 8 10\n";
+  const std::string sha = sha256_hex_of_file([&] {
+    std::ofstream(dir / "scan.xyz", std::ios::binary) << bytes;
+    return dir / "scan.xyz";
+  }());
+  for (const std::string ext : {".xyz", ".asc", ".pcd", ".ply"}) {
+    const UploadStatus st = store.upload({"scan" + ext, bytes.size(), sha, 0, encode_base64(bytes)});
+    EXPECT_TRUE(st.complete);
+    EXPECT_EQ(st.model, "sha256:" + sha + ext);
+    EXPECT_EQ(store.resolve(st.model), dir / "models" / (sha + ext));
+  }
+  const RpcError e = rpc_error_of([&] { store.upload({"scan.las", bytes.size(), sha, 0, encode_base64(bytes)}); },
+                                  rpc_code::invalid_params);
+  EXPECT_THAT(e.what(), HasSubstr("\"scan.las\" is not a model file (expected a mesh or a point cloud: .stl, .ply, .obj, "
+                                  ".off, .xyz, .asc or .pcd)"));
+  EXPECT_THAT(rpc_error_of([&] { store.resolve("sha256:" + sha + ".las"); }, rpc_code::invalid_params).what(),
+              HasSubstr("after the digest only .stl, .ply, .obj, .off, .xyz, .asc or .pcd may follow"));
+}
+
+TEST(ModelStore, TheDefaultLimitIsOneGibibyte) {
+  EXPECT_EQ(ModelStore::default_max_model_bytes, std::uint64_t{1} << 30);
+  const fs::path dir = fresh_folder("models-limit");
+  ModelStore store(dir / "models", "");
+  const RpcError e = rpc_error_of(
+      [&] { store.upload({"scan.pcd", (std::uint64_t{1} << 30) + 1, std::string(64, 'a'), 0, ""}); }, rpc_code::upload_error);
+  EXPECT_THAT(e.what(), HasSubstr("model of 1073741825 bytes is over the limit of 1073741824 bytes (1024 MiB)"));
+}
+
 TEST(ModelStore, ResolvesFilesInsideModelsDirOnly) {
   const fs::path dir = fresh_folder("models-resolve");
   const fs::path models = dir / "library";

@@ -17,6 +17,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     cmm::fuzz::refusing_with<RpcError>([&] { (void)parse_job_request(params, config, true); });
     const JobRequest r = parse_job_request(params, config);
     if (r.given.has_value() == r.measure.has_value()) __builtin_trap();  // exactly one registration
+    // The scan options the front end gets are inside their documented ranges.
+    if (r.tolerance_mm && !(*r.tolerance_mm >= 0.001 && *r.tolerance_mm <= 10)) __builtin_trap();
+    if (r.bin_size_mm && !(*r.bin_size_mm >= 0.001 && *r.bin_size_mm <= 10)) __builtin_trap();
   });
   return 0;
 }

@@ -85,6 +85,10 @@ put("ply", "binary-le-colours-edges.ply", ply_binary("<", "float", "short", extr
 quad = "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n" \
        "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n"
 put("ply", "quad.ply", quad)
+# A raw scan as scanners export it: binary points with normals and no face element.
+put("ply", "binary-cloud-normals.ply", (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(V)}\n"
+    + "".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz")) + "end_header\n").encode()
+    + b"".join(struct.pack("<6f", *v, *N[i]) for i, v in enumerate(V)))
 
 solid = "solid cut\n" + "".join(
     "  facet normal 0 0 1\n    outer loop\n" + "".join(f"      vertex {x} {y} {z}\n" for x, y, z in (V[a], V[b], V[c]))
@@ -111,6 +115,39 @@ put("off", "header-counts-one-line.off", f"OFF {len(V)} 0 0\n" + off_v)
 
 put("xyz", "plain.xyz", "".join(f"{x} {y} {z}\n" for x, y, z in V))
 put("xyz", "normals-commas-comments.xyz", "# x, y, z, nx, ny, nz\n\n" + "".join(f"{x},{y},{z},0,0,1\n" for x, y, z in V))
+
+
+
+def pcd_header(fields, sizes, types, counts, width, height, data, viewpoint="0 0 0 1 0 0 0"):
+    return (f"# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS {fields}\nSIZE {sizes}\nTYPE {types}\n"
+            f"COUNT {counts}\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT {viewpoint}\nPOINTS {width * height}\nDATA {data}\n")
+
+
+def lzf_literals(raw):
+    return b"".join(bytes([len(raw[i:i + 32]) - 1]) + raw[i:i + 32] for i in range(0, len(raw), 32))
+
+
+xyzn = "x y z normal_x normal_y normal_z"
+put("pcd", "ascii.pcd", pcd_header(xyzn, "4 4 4 4 4 4", "F F F F F F", "1 1 1 1 1 1", len(V), 1, "ascii")
+    + "".join(" ".join(map(str, v + N[i])) + "\n" for i, v in enumerate(V)))
+put("pcd", "binary-double.pcd", pcd_header("x y z", "8 8 8", "F F F", "1 1 1", len(V), 1, "binary").encode()
+    + b"".join(struct.pack("<3d", *v) for v in V))
+# Other fields around the coordinates, of every type, a padding field and a descriptor of 4 values.
+odd = pcd_header("rgb z _ x intensity y fpfh", "4 4 1 8 2 4 4", "U F U F I F F", "1 1 3 1 1 1 4", len(V), 1, "binary").encode()
+put("pcd", "binary-fields.pcd", odd + b"".join(struct.pack("<If3xdhf4f", 0xff8000, v[2], v[0], -7, v[1], 1, 2, 3, 4) for v in V))
+columns = b"".join(struct.pack(f"<{len(V)}f", *(v[k] for v in V)) for k in range(3))
+put("pcd", "binary-compressed-literals.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", len(V), 1, "binary_compressed").encode()
+    + struct.pack("<II", len(lzf_literals(columns)), len(columns)) + lzf_literals(columns))
+put("pcd", "pcl-binary-compressed.pcd", (data / "pcd/plane_normals_binary_compressed.pcd").read_bytes())
+put("pcd", "pcl-binary-padded.pcd", (data / "pcd/plane_normals_binary.pcd").read_bytes())
+nan = float("nan")
+grid = [V[0], (nan, nan, nan), V[1], V[2], (nan, nan, nan), V[3]]
+put("pcd", "organized-nan.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 3, 2, "binary", "1 2 3 0.5 0.5 0.5 0.5").encode()
+    + b"".join(struct.pack("<3f", *v) for v in grid))
+put("pcd", "organized-nan-ascii.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 3, 2, "ascii")
+    + "".join(" ".join(map(str, v)) + "\n" for v in grid))
+put("pcd", "version-5-columns.pcd", "COLUMNS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n")
+put("xyz", "scanner.asc", "".join(f"{x} {y} {z}\n" for x, y, z in V))
 
 for broken in sorted((data / "broken").iterdir()):
     put(broken.suffix[1:], "broken-" + broken.name, broken.read_bytes())
@@ -145,6 +182,8 @@ submit = {"model": "sha256:" + "0" * 64, "name": "case3", "scale": 1, "delta_mm"
 put("job_request", "given.json", json.dumps(submit))
 put("job_request", "measure-plate.json", json.dumps(dict(submit, model="file:part.stl", registration=measure)))
 put("job_request", "preview.json", json.dumps({"model": "file:part.ply"}))
+put("job_request", "raw-scan.json", json.dumps(dict(submit, model="sha256:" + "0" * 64 + ".pcd", tolerance_mm=0.05,
+                                                    bin_size_mm=0.2, adaptive=True)))
 
 
 def rpc(method, params=None, id=1):

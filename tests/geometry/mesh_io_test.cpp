@@ -139,7 +139,7 @@ TEST_F(MeshIo, UnknownExtensionNamesTheSupportedOnes) {
     FAIL() << "no error";
   } catch (const FileError& e) {
     EXPECT_THAT(e.what(), HasSubstr("part.step"));
-    EXPECT_THAT(e.what(), HasSubstr("'.step'; expected .stl, .ply, .obj, .off or .xyz"));
+    EXPECT_THAT(e.what(), HasSubstr("'.step'; expected .stl, .ply, .obj, .off, .xyz, .asc or .pcd"));
   }
   EXPECT_THROW(write_mesh(path("part"), cube()), FileError);
 }

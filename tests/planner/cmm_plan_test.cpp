@@ -298,13 +298,36 @@ TEST_F(CmmPlan, OpenMeshReportsUnprobeableBoundaries) {
   EXPECT_GT(boundary, 0);
 }
 
-TEST_F(CmmPlan, PointCloudIsRefusedClearly) {
+TEST_F(CmmPlan, ACloudTooSmallToFitIsRefusedClearly) {
   std::ofstream(path("scan.xyz")) << "0 0 0\n1 0 0\n0 1 0\n";
   const CommandResult r = plan(path("scan.xyz"), path("plan.json"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("point cloud (3 points"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("triangle mesh"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("scan.xyz: 3 points, fewer than the 26 one local surface fit needs"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("plan.json")));
+}
+
+// A raw scan (points with the scanner's normals, strays, several views) is thinned, meshed and planned
+// on like a mesh; the summary and the plan say how, and --emit-mesh writes the mesh planned on.
+TEST_F(CmmPlan, ARawScanIsMeshedAndPlanned) {
+  const CommandResult scan = run_command(std::string(CMMD_BINARY_DIR) + "/sim/cmm-scan --part cube --spacing 0.7 --noise 0.02 --cloud " +
+                                         path("cube_scan.ply"));
+  ASSERT_EQ(scan.exit_code, 0) << scan.output;
+  const CommandResult r =
+      plan(path("cube_scan.ply"), path("plan.json"), "--tolerance 0.05 --spacing 4 --emit-mesh " + path("mesh.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* line : {"scan       ", "thin       bin ", "mesh       ", "scan time  outliers"})
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << " missing from\n" << r.output;
+  EXPECT_TRUE(fs::exists(path("mesh.ply")));
+  expect_valid(path("plan.json"));
+  const nlohmann::json p = load(path("plan.json"));
+  const nlohmann::json& s = p["model"]["scan"];
+  ASSERT_TRUE(s.is_object()) << p["model"].dump();
+  EXPECT_EQ(s["tolerance_mm"], 0.05);
+  EXPECT_GT(s["points_in"].get<int>(), s["points_kept"].get<int>());
+  EXPECT_GT(s["triangles"].get<int>(), 1000);
+  EXPECT_GE(s["creases"].get<int>(), 8);  // the cube's edges between seen faces
+  EXPECT_NE(p["delta_source"].get<std::string>().find("raw scan's own noise sigma"), std::string::npos);
+  EXPECT_GT(p["edge_points"].size(), 20u);
 }
 
 TEST_F(CmmPlan, ScaleBeyondDoubleRangeIsRefused) {

@@ -1,0 +1,504 @@
+// Each irregular raw point (one per half-bin cell) looks at the regular points around it: when their
+// normals fall into two groups more than the crease angle apart, the planes fitted to the two groups
+// meet in a line through the crease (three groups: a corner, where three planes meet in a point).
+// The local lines are walked into polylines, joined to the corners they run into, and resampled
+// every ≈ B with each point put back on its nearest local line, so a straight crease stays exact.
+#include "geometry/crease_points.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <unordered_map>
+
+#include "geometry/point_grid.hpp"
+
+namespace cmm::geometry {
+namespace {
+
+struct Plane {
+  Vec3 normal = Vec3::UnitZ();
+  double offset = 0;  // normal · x = offset
+  double rms = 0;
+  double inliers = 1;  // fraction of the group the trimmed fit kept
+};
+
+// What one irregular raw point sees: a crease line through it, a corner near it, or nothing.
+struct LocalCrease {
+  int sides = 0;  // 0 nothing, 2 crease, 3 corner
+  Vec3 position = Vec3::Zero();
+  Vec3 direction = Vec3::Zero();
+  std::array<Vec3, 3> normals{Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
+};
+
+double cos_deg(double deg) { return std::cos(deg * std::numbers::pi / 180); }
+
+Vec3 point(const Points& p, int i) { return p.row(i).transpose(); }
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+double scan_noise(const std::vector<LocalSurface>& fits) {
+  std::vector<double> r;
+  for (const LocalSurface& f : fits)
+    if (f.regular) r.push_back(f.residual_rms_mm);
+  return median(std::move(r));
+}
+
+Plane fit_plane(const Points& raw, const std::vector<int>& ids) {
+  Vec3 centroid = Vec3::Zero();
+  for (int i : ids) centroid += point(raw, i);
+  centroid /= static_cast<double>(ids.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int i : ids) {
+    const Vec3 d = point(raw, i) - centroid;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Plane plane;
+  plane.normal = eig.eigenvectors().col(0).normalized();
+  plane.offset = plane.normal.dot(centroid);
+  plane.rms = std::sqrt(std::max(0.0, eig.eigenvalues()(0)) / static_cast<double>(ids.size()));
+  return plane;
+}
+
+// Trims the points a neighbouring face lent the group (their normals were blended) before the
+// final fit: on exact data the plane comes out exact.
+Plane robust_plane(const Points& raw, std::vector<int> ids, double floor) {
+  const double total = static_cast<double>(ids.size());
+  Plane plane = fit_plane(raw, ids);
+  for (int round = 0; round < 3; ++round) {
+    std::vector<double> residual;
+    for (int i : ids) residual.push_back(std::abs(plane.normal.dot(point(raw, i)) - plane.offset));
+    const double threshold = std::max(floor, 3 * 1.4826 * median(residual));
+    std::vector<int> kept;
+    for (std::size_t k = 0; k < ids.size(); ++k)
+      if (residual[k] <= threshold) kept.push_back(ids[k]);
+    if (kept.size() == ids.size() || kept.size() < 6) break;
+    ids = std::move(kept);
+    plane = fit_plane(raw, ids);
+  }
+  plane.inliers = static_cast<double>(ids.size()) / total;
+  return plane;
+}
+
+// k-means on unoriented normals from the given seeds; returns the group of each normal.
+std::vector<int> group_normals(const std::vector<Vec3>& normals, std::vector<Vec3>& seeds) {
+  std::vector<int> group(normals.size(), 0);
+  for (int iteration = 0; iteration < 6; ++iteration) {
+    std::vector<Vec3> sums(seeds.size(), Vec3::Zero());
+    for (std::size_t i = 0; i < normals.size(); ++i) {
+      int best = 0;
+      for (std::size_t k = 1; k < seeds.size(); ++k)
+        if (std::abs(normals[i].dot(seeds[k])) > std::abs(normals[i].dot(seeds[best]))) best = static_cast<int>(k);
+      group[i] = best;
+      sums[best] += normals[i].dot(seeds[best]) < 0 ? -normals[i] : normals[i];
+    }
+    for (std::size_t k = 0; k < seeds.size(); ++k)
+      if (sums[k].norm() > 0) seeds[k] = sums[k].normalized();
+  }
+  return group;
+}
+
+// The normal farthest (unoriented) from all of `seeds`, and its |cos| to the nearest of them.
+std::pair<Vec3, double> farthest_normal(const std::vector<Vec3>& normals, const std::vector<Vec3>& seeds) {
+  Vec3 best = normals.front();
+  double best_cos = 2;
+  for (const Vec3& n : normals) {
+    double c = 0;
+    for (const Vec3& s : seeds) c = std::max(c, std::abs(n.dot(s)));
+    if (c < best_cos) best_cos = c, best = n;
+  }
+  return {best, best_cos};
+}
+
+struct Analysis {
+  const Points& raw;
+  const std::vector<LocalSurface>& fits;
+  const CloudIndex& index;
+  double bin, cos_crease, plane_floor, plane_tolerance;
+
+  // Splits the regular neighbours into `sides` groups of distinct normals; empty when they do not split.
+  std::vector<std::vector<int>> split(const std::vector<int>& members, const std::vector<Vec3>& normals, int sides) const {
+    std::vector<Vec3> seeds{normals.front()};
+    while (static_cast<int>(seeds.size()) < sides) {
+      const auto [far, c] = farthest_normal(normals, seeds);
+      if (c > cos_crease) return {};
+      seeds.push_back(far);
+    }
+    const std::vector<int> group = group_normals(normals, seeds);
+    for (std::size_t i = 0; i < seeds.size(); ++i)
+      for (std::size_t j = i + 1; j < seeds.size(); ++j)
+        if (std::abs(seeds[i].dot(seeds[j])) > cos_crease) return {};
+    std::vector<std::vector<int>> groups(seeds.size());
+    for (std::size_t i = 0; i < members.size(); ++i) groups[group[i]].push_back(members[i]);
+    const std::size_t min_size = std::max<std::size_t>(6, members.size() / 10);
+    for (const auto& g : groups)
+      if (g.size() < min_size) return {};
+    return groups;
+  }
+
+  // The group's points lie on one side of the crease line, as a face ends at its crease.
+  bool one_sided(const std::vector<int>& group, const Vec3& normal, const Vec3& on_line, const Vec3& direction) const {
+    const Vec3 across = normal.cross(direction);
+    int positive = 0, negative = 0;
+    for (int i : group) {
+      const double s = (point(raw, i) - on_line).dot(across);
+      if (s > 0.05 * bin) ++positive;
+      if (s < -0.05 * bin) ++negative;
+    }
+    return std::min(positive, negative) <= (positive + negative) / 10;
+  }
+
+  LocalCrease crease(const Vec3& x0, const std::vector<std::vector<int>>& groups) const {
+    Plane p[2];
+    for (int k = 0; k < 2; ++k) {
+      p[k] = robust_plane(raw, groups[k], plane_floor);
+      if (p[k].rms > plane_tolerance || p[k].inliers < 0.8) return {};
+    }
+    const double c = p[0].normal.dot(p[1].normal);
+    if (std::abs(c) > cos_crease) return {};
+    // The point of the line nearest x0: x0 + α n0 + β n1 on both planes.
+    const double r0 = p[0].offset - p[0].normal.dot(x0), r1 = p[1].offset - p[1].normal.dot(x0);
+    const double det = 1 - c * c;
+    const double alpha = (r0 - c * r1) / det, beta = (r1 - c * r0) / det;
+    LocalCrease out;
+    out.position = x0 + alpha * p[0].normal + beta * p[1].normal;
+    if ((out.position - x0).norm() > 1.5 * bin) return {};
+    out.direction = p[0].normal.cross(p[1].normal).normalized();
+    for (int k = 0; k < 2; ++k)
+      if (!one_sided(groups[k], p[k].normal, out.position, out.direction)) return {};
+    out.sides = 2;
+    out.normals = {p[0].normal, p[1].normal, p[1].normal};
+    refine_in_profile(out, groups);
+    return out;
+  }
+
+  // Planes fitted over 2 B of a curved face are secants that meet off the crease; in the cross-section
+  // square to the crease each face is a nearly straight profile (a cone's generator exactly), so the
+  // two profiles' lines meet on it.
+  void refine_in_profile(LocalCrease& c, const std::vector<std::vector<int>>& groups) const {
+    const Vec3 b1 = c.normals[0], b2 = c.direction.cross(b1);
+    Eigen::Vector2d centre[2], along[2];
+    for (int k = 0; k < 2; ++k) {
+      std::vector<Eigen::Vector2d> profile;
+      for (int i : groups[k]) {
+        const Vec3 d = point(raw, i) - c.position;
+        if (std::abs(d.dot(c.direction)) <= 0.25 * bin) profile.emplace_back(d.dot(b1), d.dot(b2));
+      }
+      if (profile.size() < 5) return;
+      Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+      for (const auto& q : profile) mean += q / static_cast<double>(profile.size());
+      Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+      for (const auto& q : profile) cov += (q - mean) * (q - mean).transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+      centre[k] = mean;
+      along[k] = eig.eigenvectors().col(1);
+    }
+    // centre0 + s·along0 = centre1 + t·along1
+    Eigen::Matrix2d m;
+    m << along[0], -along[1];
+    if (std::abs(m.determinant()) < 0.2) return;
+    const Eigen::Vector2d st = m.partialPivLu().solve(centre[1] - centre[0]);
+    const Eigen::Vector2d hit = centre[0] + st(0) * along[0];
+    if (hit.norm() < 0.5 * bin) c.position += hit(0) * b1 + hit(1) * b2;
+  }
+
+  LocalCrease corner(const Vec3& x0, const std::vector<std::vector<int>>& groups) const {
+    Eigen::Matrix3d n;
+    Vec3 offsets;
+    LocalCrease out;
+    for (int k = 0; k < 3; ++k) {
+      const Plane p = robust_plane(raw, groups[k], plane_floor);
+      if (p.rms > plane_tolerance || p.inliers < 0.8) return {};
+      n.row(k) = p.normal.transpose();
+      offsets(k) = p.offset;
+      out.normals[k] = p.normal;
+    }
+    if (std::abs(n.determinant()) < 0.1) return {};
+    out.position = n.partialPivLu().solve(offsets);
+    if ((out.position - x0).norm() > 2.5 * bin) return {};
+    out.sides = 3;
+    return out;
+  }
+
+  LocalCrease operator()(int candidate) const {
+    const Vec3 x0 = point(raw, candidate);
+    std::vector<int> members;
+    std::vector<Vec3> normals;
+    for (int j : index.within(x0, 2 * bin)) {
+      if (!fits[j].regular) continue;
+      members.push_back(j);
+      normals.push_back(fits[j].normal);
+    }
+    if (members.size() < 12) return {};
+    const auto three = split(members, normals, 3);
+    if (!three.empty()) {
+      const LocalCrease c = corner(x0, three);
+      if (c.sides == 3) return c;
+    }
+    const auto two = split(members, normals, 2);
+    return two.empty() ? LocalCrease{} : crease(x0, two);
+  }
+};
+
+// One irregular raw point per half-bin cell, the one nearest the cell's centre.
+std::vector<int> candidates(const Points& raw, const std::vector<LocalSurface>& fits, double bin) {
+  const double cell = bin / 2;
+  std::unordered_map<std::uint64_t, std::pair<double, int>> best;
+  for (Eigen::Index i = 0; i < raw.rows(); ++i) {
+    if (fits[i].regular) continue;
+    const Vec3 p = raw.row(i).transpose() / cell;
+    const Vec3 c = p.array().floor();
+    const double d = (p - c - Vec3::Constant(0.5)).squaredNorm();
+    const auto k = [](double v) { return std::uint64_t(std::int64_t(v) & 0x1fffff); };
+    const std::uint64_t key = (k(c.x()) << 42) | (k(c.y()) << 21) | k(c.z());
+    auto [it, inserted] = best.try_emplace(key, d, static_cast<int>(i));
+    if (!inserted && d < it->second.first) it->second = {d, static_cast<int>(i)};
+  }
+  std::vector<int> out;
+  out.reserve(best.size());
+  for (const auto& [key, v] : best) out.push_back(v.second);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+bool same_crease(const LocalCrease& a, const LocalCrease& b, double cos_tol) {
+  if (std::abs(a.direction.dot(b.direction)) < cos_tol) return false;
+  const auto match = [&](const Vec3& x, const Vec3& y) { return std::abs(x.dot(y)) >= cos_tol; };
+  return (match(a.normals[0], b.normals[0]) && match(a.normals[1], b.normals[1])) ||
+         (match(a.normals[0], b.normals[1]) && match(a.normals[1], b.normals[0]));
+}
+
+struct Chain {
+  std::vector<int> samples;  // into the local creases, in order along the crease
+  int corner_front = -1, corner_back = -1;
+  bool closed = false;
+};
+
+class ChainWalker {
+ public:
+  ChainWalker(const std::vector<LocalCrease>& local, double bin)
+      : local_(local), bin_(bin), positions_(static_cast<Eigen::Index>(local.size()), 3), taken_(local.size(), 0) {
+    for (std::size_t i = 0; i < local.size(); ++i) positions_.row(static_cast<Eigen::Index>(i)) = local[i].position.transpose();
+    grid_ = std::make_unique<PointGrid>(positions_, 2 * bin);
+  }
+
+  std::vector<Chain> chains() {
+    std::vector<Chain> out;
+    for (std::size_t i = 0; i < local_.size(); ++i) {
+      if (taken_[i]) continue;
+      Chain chain;
+      chain.samples.push_back(static_cast<int>(i));
+      taken_[i] = 1;
+      absorb(static_cast<int>(i), local_[i].direction, -0.5 * bin_, 0.5 * bin_);
+      std::vector<int> forward = walk(static_cast<int>(i), local_[i].direction, &chain.closed);
+      std::vector<int> backward;
+      if (!chain.closed) backward = walk(static_cast<int>(i), -local_[i].direction, nullptr);
+      chain.samples.clear();
+      chain.samples.insert(chain.samples.end(), backward.rbegin(), backward.rend());
+      chain.samples.push_back(static_cast<int>(i));
+      chain.samples.insert(chain.samples.end(), forward.begin(), forward.end());
+      out.push_back(std::move(chain));
+    }
+    return out;
+  }
+
+ private:
+  // Marks the unwalked samples of this crease between `from` and `to` along t as walked over.
+  void absorb(int at, const Vec3& t, double from, double to) {
+    const Vec3 x = local_[at].position;
+    grid_->for_each_within(x, std::max(std::abs(from), std::abs(to)) + bin_, [&](int q, double) {
+      if (taken_[q] || !same_crease(local_[at], local_[q], cos_deg(30))) return;
+      const Vec3 d = local_[q].position - x;
+      const double along = d.dot(t);
+      if (along >= from && along <= to && (d - along * t).norm() <= 0.5 * bin_) taken_[q] = 1;
+    });
+  }
+
+  std::vector<int> walk(int start, Vec3 t, bool* closed) {
+    std::vector<int> steps;
+    int at = start;
+    for (;;) {
+      const Vec3 x = local_[at].position;
+      int next = -1;
+      double next_along = 0;
+      grid_->for_each_within(x, 1.6 * bin_, [&](int q, double) {
+        if (taken_[q] || !same_crease(local_[at], local_[q], cos_deg(30))) return;
+        const Vec3 d = local_[q].position - x;
+        const double along = d.dot(t);
+        if (along < 0.25 * bin_ || (d - along * t).norm() > 0.5 * bin_) return;
+        // Steps of about B/2: the resampled points then lie close to a sample's own tangent line.
+        const double miss = std::abs(along - 0.5 * bin_), best_miss = std::abs(next_along - 0.5 * bin_);
+        if (next < 0 || miss < best_miss || (miss == best_miss && q < next)) next = q, next_along = along;
+      });
+      if (next < 0) {
+        if (closed && steps.size() >= 3) {
+          const Vec3 d = local_[start].position - x;
+          if (d.norm() <= 1.8 * bin_ && d.dot(t) > 0) *closed = true;
+        }
+        return steps;
+      }
+      taken_[next] = 1;
+      absorb(at, t, 0, next_along + 0.3 * bin_);
+      steps.push_back(next);
+      const Vec3 d = local_[next].direction;
+      t = d.dot(t) < 0 ? -d : d;
+      at = next;
+    }
+  }
+
+  const std::vector<LocalCrease>& local_;
+  double bin_;
+  Points positions_;
+  std::unique_ptr<PointGrid> grid_;
+  std::vector<char> taken_;
+};
+
+// The corner a chain's end runs into, if any: ahead of the end, on its line, within reach.
+int corner_ahead(const std::vector<CreasePoint>& corners, const Vec3& end, const Vec3& t, double bin) {
+  int best = -1;
+  double best_d = 3.5 * bin;
+  for (std::size_t k = 0; k < corners.size(); ++k) {
+    const Vec3 d = corners[k].position - end;
+    const double along = d.dot(t);
+    if (along < -0.2 * bin || (d - along * t).norm() > 0.5 * bin) continue;
+    if (d.norm() < best_d) best_d = d.norm(), best = static_cast<int>(k);
+  }
+  return best;
+}
+
+// Resamples a chain every ≈ B, each new point moved onto the local line of the sample nearest it.
+void emit_polyline(const Chain& chain, const std::vector<LocalCrease>& local, double bin, Creases& out) {
+  struct Node {
+    Vec3 x;
+    int sample;  // −1: a corner
+    int corner;
+  };
+  std::vector<Node> nodes;
+  if (chain.corner_front >= 0) nodes.push_back({out.points[chain.corner_front].position, -1, chain.corner_front});
+  for (int s : chain.samples) nodes.push_back({local[s].position, s, -1});
+  if (chain.corner_back >= 0) nodes.push_back({out.points[chain.corner_back].position, -1, chain.corner_back});
+  if (chain.closed) nodes.push_back(nodes.front());
+  std::vector<double> arc{0};
+  for (std::size_t i = 1; i < nodes.size(); ++i) arc.push_back(arc.back() + (nodes[i].x - nodes[i - 1].x).norm());
+  const double length = arc.back();
+  const bool has_corner = chain.corner_front >= 0 || chain.corner_back >= 0;
+  if (length < (has_corner ? 0.5 : 1.5) * bin) return;
+  const int segments = std::max(chain.closed ? 3 : 1, static_cast<int>(std::lround(length / bin)));
+  CreasePolyline line;
+  line.closed = chain.closed;
+  const LocalCrease& middle = local[chain.samples[chain.samples.size() / 2]];
+  line.normal_a = middle.normals[0];
+  line.normal_b = middle.normals[1];
+  const int count = chain.closed ? segments : segments + 1;
+  std::size_t node = 0;
+  for (int k = 0; k < count; ++k) {
+    const double s = length * k / segments;
+    while (node + 2 < nodes.size() && arc[node + 1] <= s) ++node;
+    const bool at_first = k == 0, at_last = !chain.closed && k == segments;
+    const Node& end_node = at_first ? nodes.front() : nodes.back();
+    if ((at_first || at_last) && end_node.corner >= 0) {
+      line.points.push_back(end_node.corner);
+      continue;
+    }
+    const double span = arc[node + 1] - arc[node];
+    const double w = span > 0 ? std::clamp((s - arc[node]) / span, 0.0, 1.0) : 0.0;
+    Vec3 x = (1 - w) * nodes[node].x + w * nodes[node + 1].x;
+    // Onto the tangent lines of the walked samples on either side, blended (a corner has none).
+    const int s0 = nodes[node].sample, s1 = nodes[node + 1].sample;
+    const auto onto = [&](int sample) {
+      const LocalCrease& l = local[sample];
+      return Vec3(l.position + (x - l.position).dot(l.direction) * l.direction);
+    };
+    CreasePoint p;
+    if (s0 >= 0 || s1 >= 0) {
+      x = s0 >= 0 && s1 >= 0 ? Vec3((1 - w) * onto(s0) + w * onto(s1)) : onto(s0 >= 0 ? s0 : s1);
+      p.normals = local[(s0 >= 0 && (w < 0.5 || s1 < 0)) ? s0 : s1].normals;
+    } else {
+      p.normals = {line.normal_a, line.normal_b, line.normal_b};
+    }
+    p.position = x;
+    p.sides = 2;
+    line.points.push_back(static_cast<int>(out.points.size()));
+    out.points.push_back(p);
+  }
+  if (line.points.size() >= 2) out.polylines.push_back(std::move(line));
+}
+
+}  // namespace
+
+Creases find_creases(const Points& raw, const std::vector<LocalSurface>& fits, const CloudIndex& index,
+                     const CreaseOptions& options) {
+  Creases out;
+  const double bin = options.bin_mm;
+  if (raw.rows() < 12 || static_cast<Eigen::Index>(fits.size()) != raw.rows() || !(bin > 0)) return out;
+  const double sigma = scan_noise(fits);
+  const Analysis analysis{raw, fits, index, bin, cos_deg(options.crease_angle_deg),
+                          std::max(3 * sigma, 1e-9 * bin), std::max(4 * sigma, 0.1 * bin)};
+
+  const std::vector<int> seeds = candidates(raw, fits, bin);
+  std::vector<LocalCrease> local(seeds.size());
+  for (std::size_t begin = 0; begin < seeds.size(); begin += 4096) {
+    options.cancel.throw_if_requested("crease detection");
+    const std::size_t end = std::min(seeds.size(), begin + 4096);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) local[i] = analysis(seeds[i]);
+    });
+  }
+
+  // Corners: the three-plane points of neighbouring candidates agree; average them.
+  std::vector<int> corner_votes;
+  std::vector<Vec3> corner_sums;
+  for (const LocalCrease& l : local) {
+    if (l.sides != 3) continue;
+    std::size_t k = 0;
+    while (k < out.points.size() && (out.points[k].position - l.position).norm() > 1.5 * bin) ++k;
+    if (k == out.points.size()) {
+      out.points.push_back({l.position, l.normals, 3});
+      corner_sums.push_back(Vec3::Zero());
+      corner_votes.push_back(0);
+    }
+    corner_sums[k] += l.position;
+    ++corner_votes[k];
+  }
+  for (std::size_t k = 0; k < out.points.size(); ++k) out.points[k].position = corner_sums[k] / corner_votes[k];
+  out.corners = out.points.size();
+
+  // Crease lines; those near a corner saw part of the third face and are left to the corner.
+  std::vector<LocalCrease> lines;
+  for (const LocalCrease& l : local) {
+    if (l.sides != 2) continue;
+    bool near_corner = false;
+    for (std::size_t k = 0; k < out.corners; ++k) near_corner |= (out.points[k].position - l.position).norm() < 1.5 * bin;
+    if (!near_corner) lines.push_back(l);
+  }
+  if (lines.empty()) return out;
+  std::vector<Chain> chains = ChainWalker(lines, bin).chains();
+  const std::vector<CreasePoint> corners(out.points.begin(), out.points.end());
+  for (Chain& chain : chains) {
+    if (chain.closed) {
+      emit_polyline(chain, lines, bin, out);
+      continue;
+    }
+    const LocalCrease &first = lines[chain.samples.front()], &last = lines[chain.samples.back()];
+    const Vec3 t_back = chain.samples.size() > 1 ? (last.position - lines[chain.samples[chain.samples.size() - 2]].position).normalized()
+                                                 : last.direction;
+    const Vec3 t_front = chain.samples.size() > 1 ? (first.position - lines[chain.samples[1]].position).normalized()
+                                                  : Vec3(-first.direction);
+    chain.corner_front = corner_ahead(corners, first.position, t_front, bin);
+    chain.corner_back = corner_ahead(corners, last.position, t_back, bin);
+    if (chain.corner_back == chain.corner_front) chain.corner_back = -1;
+    emit_polyline(chain, lines, bin, out);
+  }
+  return out;
+}
+
+}  // namespace cmm::geometry

@@ -1,0 +1,86 @@
+// Statistical outlier removal: strays around a scanned surface go, the surface stays; PCL's semantics.
+#include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <iostream>
+#include <random>
+
+#include "analytic_clouds.hpp"
+#include "geometry/cloud_index.hpp"
+#include "geometry/outlier_removal.hpp"
+
+namespace cmm::geometry {
+namespace {
+
+constexpr double sphere_r = 10;
+double sphere(double x, double y) { return std::sqrt(std::max(0.0, sphere_r * sphere_r - x * x - y * y)); }
+
+// A hemisphere cap at 0.2 mm with σ 0.01 mm, and 0.5 % strays uniform in its bounding box (the surface
+// points first, then the strays).
+TEST(OutlierRemoval, StraysInTheBoundingBoxGoAndTheSurfaceStays) {
+  const Points surface = clouds::with_noise(
+      clouds::graph_samples(sphere, -8, 8, -8, 8, 0.2, [](double x, double y) { return std::hypot(x, y) <= 8; }), 0.01, 4);
+  const Eigen::Index strays = surface.rows() / 200;
+  Points p(surface.rows() + strays, 3);
+  p.topRows(surface.rows()) = surface;
+  const Eigen::RowVector3d lo = surface.colwise().minCoeff(), hi = surface.colwise().maxCoeff();
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (Eigen::Index i = 0; i < strays; ++i)
+    for (int k = 0; k < 3; ++k) p(surface.rows() + i, k) = lo(k) + u(rng) * (hi(k) - lo(k));
+  const CloudIndex index(p);
+  const std::vector<int> inliers = statistical_inliers(p, index);
+  EXPECT_TRUE(std::is_sorted(inliers.begin(), inliers.end()));
+  std::vector<char> kept(static_cast<std::size_t>(p.rows()), 0);
+  for (int i : inliers) kept[static_cast<std::size_t>(i)] = 1;
+  int surface_lost = 0, strays_kept = 0, far_strays = 0, far_strays_kept = 0;
+  for (Eigen::Index i = 0; i < surface.rows(); ++i) surface_lost += !kept[static_cast<std::size_t>(i)];
+  for (Eigen::Index i = surface.rows(); i < p.rows(); ++i) {
+    const double off = std::abs(p.row(i).norm() - sphere_r);  // distance from the sphere
+    strays_kept += kept[static_cast<std::size_t>(i)];
+    if (off > 1.0) {
+      ++far_strays;
+      far_strays_kept += kept[static_cast<std::size_t>(i)];
+    }
+  }
+  std::cout << "surface " << surface.rows() << ": " << surface_lost << " lost; strays " << strays << ": " << strays_kept
+            << " kept, of those farther than 1 mm from the surface " << far_strays_kept << " of " << far_strays << "\n";
+  EXPECT_LT(surface_lost, surface.rows() / 200);
+  EXPECT_LE(far_strays_kept * 20, far_strays);  // ≥ 95 % of the strays 5 spacings off the surface go
+  EXPECT_GT(far_strays, strays / 2);
+
+  // The same on one thread as on two.
+  std::vector<int> one;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = statistical_inliers(p, index);
+  }
+  EXPECT_EQ(one, inliers);
+}
+
+TEST(OutlierRemoval, PclSemanticsOnASmallCloud) {
+  // A 5 × 5 grid at 1 mm and one point 10 mm above its centre, k = 4: the grid's mean distances lie
+  // between 1 and 1.6, the stray's near 10; μ + 1·σ separates them.
+  Points p(26, 3);
+  for (int i = 0; i < 25; ++i) p.row(i) << i % 5, i / 5, 0;
+  p.row(25) << 2, 2, 10;
+  const CloudIndex index(p);
+  OutlierOptions options;
+  options.neighbours = 4;
+  options.std_ratio = 1;
+  const std::vector<int> inliers = statistical_inliers(p, index, options);
+  ASSERT_EQ(inliers.size(), 25u);
+  EXPECT_EQ(inliers.back(), 24);
+  // k not below the cloud's size: all kept.
+  options.neighbours = 30;
+  EXPECT_EQ(statistical_inliers(p, index, options).size(), 26u);
+  // Cancelled.
+  options.neighbours = 4;
+  options.cancel.requested = [] { return true; };
+  EXPECT_THROW(statistical_inliers(p, index, options), Cancelled);
+}
+
+}  // namespace
+}  // namespace cmm::geometry

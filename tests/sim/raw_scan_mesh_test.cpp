@@ -1,0 +1,144 @@
+// The scan front end on the case-3 block as a raw multi-view scan (σ 0.1 mm, 0.2 % strays): the mesh
+// is manifold, open exactly where the scanner saw nothing, its sharp edges are the block's, and a plan
+// on it, touched on the true block, measures the edges within 10 µm of the truth.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "edge_truth.hpp"
+#include "geometry/analytic_parts.hpp"
+#include "geometry/feature_model.hpp"
+#include "geometry/scan_front_end.hpp"
+#include "planner/plan_compensation.hpp"
+#include "sim/raw_scan.hpp"
+#include "sim/scan_borders.hpp"
+#include "true_part_touches.hpp"
+
+namespace cmm {
+namespace {
+
+struct Case3Scan {
+  geometry::AnalyticPart truth = geometry::make_case3_block(0.25);
+  std::vector<sim::ScanBorder> borders;
+  geometry::ScanMesh meshed;
+  geometry::FeatureModel features;
+};
+
+// Made once: the scan and its mesh are the expensive part, every test reads them.
+const Case3Scan& case3_scan() {
+  static const Case3Scan scan = [] {
+    Case3Scan s;
+    const geometry::TriangleMesh scene = geometry::make_case3_block(1.0).mesh;
+    sim::RawScanOptions options;
+    options.spacing_mm = 0.6;
+    options.noise_sigma_mm = 0.1;
+    options.stray_fraction = 0.002;
+    options.seed = 7;
+    const sim::RawScan raw = sim::synthesize_raw_scan(scene, options);
+    s.borders = sim::scan_borders(scene, options.views);
+    geometry::ScanOptions front;
+    front.tolerance_mm = 0.1;
+    s.meshed = geometry::mesh_scan(raw.cloud, "case-3 raw scan", front);
+    geometry::FeatureModelOptions features;
+    features.spacing = 2;
+    s.features = geometry::extract_features(s.meshed.mesh, features);
+    const geometry::ScanReport& r = s.meshed.report;
+    std::printf("case-3 raw scan: %zu points, %zu outliers removed, noise sigma %.4f mm, bin %.3f mm (%s), %zu kept, "
+                "%zu triangles, %zu outer + %zu hole loops, %zu creases (%zu points)\n",
+                r.points_in, r.outliers_removed, r.noise_sigma_mm, r.bin_size_mm, r.bin_size_source.c_str(), r.points_kept,
+                r.triangles, r.outer_loops, r.hole_loops, r.creases, r.crease_points);
+    return s;
+  }();
+  return scan;
+}
+
+TEST(RawScanMesh, Case3IsManifoldAndConsistentlyOriented) {
+  const auto& s = case3_scan();
+  const geometry::TopologyReport& t = s.features.topology;
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+  EXPECT_EQ(t.inconsistently_oriented_edges, 0u);
+  EXPECT_EQ(t.components, 1);
+  // The beam noise (σ 0.1 mm) runs along each view; off the surface it is σ·cos(incidence), and the
+  // views meet the block's faces at 0° to 75°: the fits see between 0.026 and 0.1 mm.
+  EXPECT_GT(s.meshed.report.noise_sigma_mm, 0.05);
+  EXPECT_LT(s.meshed.report.noise_sigma_mm, 0.1);
+}
+
+// One loop per border of the seen region, at the same place and of the same kind, and no other.
+TEST(RawScanMesh, Case3LoopsAreTheBordersOfWhatWasSeen) {
+  const auto& s = case3_scan();
+  const std::vector<geometry::BoundaryLoop>& loops = s.features.loops;
+  EXPECT_EQ(loops.size(), s.borders.size());
+  std::vector<bool> matched(s.borders.size(), false);
+  for (const geometry::BoundaryLoop& loop : loops) {
+    geometry::Vec3 centre = geometry::Vec3::Zero();
+    for (int v : loop.vertices) centre += geometry::vertex(s.meshed.mesh, v);
+    centre /= static_cast<double>(loop.vertices.size());
+    int best = -1;
+    for (std::size_t b = 0; b < s.borders.size(); ++b)
+      if ((s.borders[b].centre - centre).norm() < 3 && s.borders[b].kind == loop.kind) best = static_cast<int>(b);
+    if (best < 0) {
+      ADD_FAILURE() << "a loop of " << loop.vertices.size() << " vertices, perimeter " << loop.perimeter << " mm, centre ("
+                    << centre.transpose() << ") matches no border of the seen region";
+      continue;
+    }
+    EXPECT_FALSE(matched[best]) << "two loops at the border near (" << s.borders[best].centre.transpose() << ")";
+    matched[best] = true;
+  }
+}
+
+// Every true sharp edge with both sides seen (not the underside's) is a feature curve of the mesh.
+TEST(RawScanMesh, Case3EverySharpEdgeBetweenSeenFacesIsFound) {
+  const auto& s = case3_scan();
+  int edges = 0;
+  for (const geometry::TrueEdge& edge : s.truth.sharp_edges) {
+    const auto& first = edge.samples.front();
+    if (first.n_up.z() < -0.9 || first.n_down.z() < -0.9) continue;  // the underside: a border, not an edge
+    ++edges;
+    int found = 0;
+    for (const auto& sample : edge.samples) {
+      double nearest = 1e300;
+      for (const geometry::EdgePoint& p : s.features.points)
+        if (p.kind != geometry::EdgeKind::boundary) nearest = std::min(nearest, (p.position - sample.position).norm());
+      found += nearest <= 1.5;  // within the 2 mm spacing's reach
+    }
+    EXPECT_GE(found, static_cast<int>(0.95 * static_cast<double>(edge.samples.size())))
+        << "true edge through (" << first.position.transpose() << "): " << found << " of " << edge.samples.size()
+        << " samples near a sharp-edge point of the mesh";
+  }
+  EXPECT_EQ(edges, 4 + 4 + 5);  // the top's 4 edges, the 4 vertical ones, the 5 bores' top rims
+}
+
+TEST(RawScanMesh, Case3JobMeasuresTheEdgesWithin10um) {
+  const auto& s = case3_scan();
+  constexpr double radius = 1, sigma = 0.001;
+  const Eigen::Isometry3d T_M_S = planner::testing::tilted_machine_pose();
+  description::MachineDescription machine = description::default_machine();
+  machine.tips.front().ball_radius_mm = radius;
+  machine.tips.front().shaft_length_mm = 60;
+  planner::MeasurementPlanOptions options;
+  options.touch.radius = radius;
+  options.touch.delta = std::max(0.2, 3 * s.features.point_sigma_mm);
+  const planner::MeasurementPlan plan = planner::plan_measurement(s.features, s.meshed.mesh, T_M_S, machine, options);
+  const planner::testing::TrueTouches touches = planner::testing::touch_true_part(s.truth.mesh, T_M_S, plan, radius, sigma, 99);
+  const planner::MeasurementResult result =
+      planner::compensate_plan(s.features, plan, T_M_S, touches.outcomes, {radius, sigma});
+  EXPECT_EQ(touches.missed, 0);
+  double worst = 0;
+  for (const planner::EdgeResult& e : result.edges) {
+    if (e.status != planner::FeatureStatus::measured) continue;
+    const double error = geometry::testing::nearest_true_edge(s.truth, e.scan->position).distance;
+    worst = std::max(worst, error);
+    EXPECT_LE(error, 0.010) << "point " << e.id << ": " << error * 1e3 << " um off the true edge";
+  }
+  const planner::ResultSummary& r = result.summary;
+  std::printf("case-3 raw scan job: %d edge points, %d measured, %d failed, %d not planned; worst %.2f um\n", r.edge_points,
+              r.edges_measured, r.edges_failed, r.edges_not_planned, worst * 1e3);
+  EXPECT_GT(r.edges_measured, 100);
+  EXPECT_EQ(r.edges_failed, 0);
+}
+
+}  // namespace
+}  // namespace cmm
