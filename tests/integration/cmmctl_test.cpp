@@ -78,6 +78,33 @@ TEST(Cmmctl, StatusSubmitWatchJobsAndResultAgainstARunningCmmd) {
 
 // The README's sample corners name their plate by a path relative to the corners file; cmmd
 // cannot read the client's files, so cmmctl sends the plate inline (issue 13: it sent the path).
+// The shop's path: a raw multi-view scan (points, strays, noise) goes to cmmd as it is; cmmd thins and
+// meshes it, stores the mesh it planned on in the job's folder, and measures the part on it.
+TEST(Cmmctl, ARawScanIsMeshedByCmmdAndMeasured) {
+  const auto dir = daemon::fresh_folder("cmmctl-raw-scan");
+  testing::CmmdInstance cmmd(dir / "cmmd", testing::timed_sim_block(50));
+  cmmd.start();
+  const std::string ctl = kCmmctl + " --endpoint unix:" + (dir / "cmmd" / "run" / "cmmd.sock").string();
+  std::filesystem::create_directories(dir / "scan");
+  std::ofstream(dir / "scan" / "sim.json") << testing::sample_sim_block().dump() << "\n";
+  auto r = cmm::test::run_command(std::string(CMMD_BINARY_DIR "/sim/cmm-scan --sim-config ") + (dir / "scan" / "sim.json").string() +
+                                  " --spacing 0.8 --noise 0.05 --cloud " + (dir / "scan" / "raw.pcd").string() +
+                                  " --plate-corners " + (dir / "scan" / "plate_corners.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = cmm::test::run_command(ctl + " submit " + (dir / "scan" / "raw.pcd").string() + " --tolerance 0.1 --spacing 8 --measure-plate " +
+                             (dir / "scan" / "plate_corners.json").string() + " --watch");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("job 1: done"), std::string::npos) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(cmmd.job_folder(1) / "reference.ply"));
+  const json plan = testing::read_json_file(cmmd.job_folder(1) / "plan.json");
+  ASSERT_TRUE(plan["model"]["scan"].is_object()) << plan["model"].dump();
+  EXPECT_EQ(plan["model"]["scan"]["tolerance_mm"], 0.1);
+  EXPECT_GT(plan["model"]["scan"]["outliers_removed"].get<int>(), 0);
+  const json result = testing::read_json_file(cmmd.job_folder(1) / "result.json");
+  EXPECT_GT(result["summary"]["edge_points"]["measured"].get<int>(), 20) << result["summary"].dump();
+  EXPECT_EQ(cmmd.terminate(), 0);
+}
+
 TEST(Cmmctl, SubmitSendsAPlateTheCornersFileNamesInline) {
   const auto dir = daemon::fresh_folder("cmmctl-sample-corners");
   testing::CmmdInstance cmmd(dir / "cmmd", testing::sample_sim_block());
