@@ -64,12 +64,15 @@ Frame make_frame(const Vec3& origin, const Vec3& normal, const Vec3& hint) {
   return f;
 }
 
-QuadricFit fit_quadric(const Points& points, std::span<const int> ids, const Frame& frame) {
+// `with_inverse`: only the fit whose curvature error is reported needs (XᵀX)⁻¹, the costliest step.
+QuadricFit fit_quadric(const Points& points, std::span<const int> ids, const Frame& frame, bool with_inverse) {
   QuadricFit fit;
   for (int id : ids) {
     const Vec3 d = point(points, id) - frame.origin;
-    fit.scale = std::max(fit.scale, std::hypot(d.dot(frame.u), d.dot(frame.v)));
+    const double u = d.dot(frame.u), v = d.dot(frame.v);
+    fit.scale = std::max(fit.scale, u * u + v * v);
   }
+  fit.scale = std::sqrt(fit.scale);
   if (!(fit.scale > 0) || !std::isfinite(fit.scale)) return fit;
   Normal xtx = Normal::Zero();
   Terms xtz = Terms::Zero();
@@ -83,7 +86,7 @@ QuadricFit fit_quadric(const Points& points, std::span<const int> ids, const Fra
   const Eigen::LDLT<Normal> solver(xtx);
   if (solver.info() != Eigen::Success || !(solver.rcond() > min_rcond)) return fit;
   fit.coef = solver.solve(xtz);
-  fit.inverse = solver.solve(Normal::Identity());
+  fit.inverse = with_inverse ? Normal(solver.solve(Normal::Identity())) : Normal(Normal::Zero());
   for (int id : ids) {
     const Vec3 d = point(points, id) - frame.origin;
     const double u = d.dot(frame.u) / fit.scale, v = d.dot(frame.v) / fit.scale;
@@ -134,7 +137,7 @@ LocalSurface fit_ids(const Points& points, std::span<const int> ids) {
   s.normal = frame.n, s.u = frame.u, s.v = frame.v;
   if (ids.size() < static_cast<std::size_t>(quadric_terms)) return s;
 
-  QuadricFit fit = fit_quadric(points, ids, frame);
+  QuadricFit fit = fit_quadric(points, ids, frame, false);
   if (!fit.ok) return s;
   // The PCA plane is the chord plane of the patch, tilted against the tangent plane at an off-centre
   // origin: the slope terms absorb that, and one refit in the frame of the quadric's own normal there
@@ -143,8 +146,9 @@ LocalSurface fit_ids(const Points& points, std::span<const int> ids) {
     const double p = fit.coef(1) / fit.scale, q = fit.coef(2) / fit.scale;
     const Vec3 tilted = (frame.n - p * frame.u - q * frame.v).normalized();
     const Frame refined = make_frame(s.origin, tilted, frame.u);
-    QuadricFit again = fit_quadric(points, ids, refined);
+    QuadricFit again = fit_quadric(points, ids, refined, true);
     if (again.ok) fit = again, frame = refined;
+    else fit = fit_quadric(points, ids, frame, true);
   }
   s.normal = frame.n, s.u = frame.u, s.v = frame.v;
   {
