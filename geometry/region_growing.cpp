@@ -1,6 +1,7 @@
 // triangulate_scan: creases first (crease_points), the thinned points in their band dropped and the
 // crease points added as vertices on both faces, each vertex told the surface it lies on, then the
-// advancing front, then each component turned outward and the mesh compacted and reported.
+// advancing front, the false holes it left filled (hole_filling), then each component turned outward
+// and the mesh compacted and reported.
 #include "geometry/region_growing.hpp"
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include "geometry/advancing_front.hpp"
 #include "geometry/crease_points.hpp"
 #include "geometry/edge_adjacency.hpp"
+#include "geometry/hole_filling.hpp"
 #include "geometry/mesh_topology.hpp"
 #include "geometry/point_grid.hpp"
 
@@ -272,9 +274,45 @@ Triangulation triangulate_scan(const Points& thinned, const Points& raw, const s
   out.mesh.faces.resize(grown.faces.rows(), 3);
   for (Eigen::Index f = 0; f < grown.faces.rows(); ++f)
     for (int k = 0; k < 3; ++k) out.mesh.faces(f, k) = index[grown.faces(f, k)];
+  // Gaps the front left where the noise kept every candidate from agreeing: raw points lie across them.
+  if (raw.rows() > 0 && raw_index.size() == static_cast<std::size_t>(raw.rows())) {
+    HoleFillingOptions filling;
+    filling.bin_mm = bin;
+    filling.crease_angle_deg = options.crease_angle_deg;
+    const HoleFilling filled = fill_false_holes(out.mesh, raw, raw_index, filling);
+    out.holes_filled = filled.loops_filled;
+    out.thinned_index.resize(out.thinned_index.size() + filled.vertices_added, -1);  // on a crease
+  }
   Vertices compact;
   for (std::size_t i = 0; i < index.size(); ++i)
     if (index[i] >= 0) compact.nearest_raw.push_back(v.nearest_raw[i]);
+  compact.nearest_raw.resize(static_cast<std::size_t>(out.mesh.vertices.rows()), -1);
+  {
+    // Compact again: the filling may have cut facets from around a ragged loop and left vertices unused.
+    std::vector<int> again(static_cast<std::size_t>(out.mesh.vertices.rows()), -1);
+    for (Eigen::Index f = 0; f < out.mesh.faces.rows(); ++f)
+      for (int k = 0; k < 3; ++k) again[out.mesh.faces(f, k)] = 0;
+    int used = 0;
+    for (int& i : again)
+      if (i == 0) i = used++;
+    if (used < out.mesh.vertices.rows()) {
+      Points x(used, 3);
+      std::vector<int> thinned_index, nearest_raw;
+      for (std::size_t i = 0; i < again.size(); ++i) {
+        if (again[i] < 0) continue;
+        x.row(again[i]) = out.mesh.vertices.row(static_cast<Eigen::Index>(i));
+        thinned_index.push_back(out.thinned_index[i]);
+        nearest_raw.push_back(compact.nearest_raw[i]);
+      }
+      for (Eigen::Index f = 0; f < out.mesh.faces.rows(); ++f)
+        for (int k = 0; k < 3; ++k) out.mesh.faces(f, k) = again[out.mesh.faces(f, k)];
+      for (int& i : index)
+        if (i >= 0) i = again[i];
+      out.mesh.vertices = std::move(x);
+      out.thinned_index = std::move(thinned_index);
+      compact.nearest_raw = std::move(nearest_raw);
+    }
+  }
   orient_components(out.mesh, compact, raw_normals, raw);
 
   for (const CreasePolyline& line : creases.polylines) {

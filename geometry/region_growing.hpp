@@ -38,8 +38,9 @@ struct CreaseLine {
 };
 
 struct Triangulation {
-  // vertices: the thinned points the facets use, in order, then the crease points they use. Thinned
-  // points in a crease's band (within B/2 of it) and crowded ones (min_spacing_bins) are left out.
+  // vertices: the thinned points the facets use, in order, then the crease points they use, then the
+  // points the hole filling put on the creases its patches cross. Thinned points in a crease's band
+  // (within B/2 of it) and crowded ones (min_spacing_bins) are left out.
   TriangleMesh mesh;
   std::vector<int> thinned_index;  // per mesh vertex: its row in `thinned`, or −1 for a crease point
   std::vector<ScanLoop> loops;
@@ -48,6 +49,7 @@ struct Triangulation {
   std::size_t creases = 0;        // crease polylines joined
   std::size_t crease_points = 0;  // vertices added on them
   std::size_t seeds = 0;          // seed triangles the growth started from
+  std::size_t holes_filled = 0;   // false holes closed after the growth (hole_filling)
   std::size_t pinched_vertices = 0;  // vertices on two boundary fans (edge-manifold, not vertex-manifold)
 };
 

@@ -1,0 +1,480 @@
+// fill_false_holes: each short loop (split at pinched vertices) is filled flat by ear clipping in its
+// plane, or, where its sides lie on two faces meeting at a crease, on each face up to a chain of new
+// vertices on the faces' intersection line, so the crease stays sharp. A patch is kept only when the
+// raw cloud lies along it: an opening of the scanned region has no scan points across it.
+#include "geometry/hole_filling.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+
+#include "geometry/boundary_loops.hpp"
+#include "geometry/edge_adjacency.hpp"
+#include "geometry/polygon_triangulation.hpp"
+
+namespace cmm::geometry {
+namespace {
+
+using Face = std::array<int, 3>;
+
+std::uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+}
+
+double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+bool segments_cross(const Eigen::Vector2d& p1, const Eigen::Vector2d& p2, const Eigen::Vector2d& q1,
+                    const Eigen::Vector2d& q2) {
+  const double o1 = cross2(p2 - p1, q1 - p1), o2 = cross2(p2 - p1, q2 - p1);
+  const double o3 = cross2(q2 - q1, p1 - q1), o4 = cross2(q2 - q1, p2 - q1);
+  return ((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0));
+}
+
+// Non-adjacent sides neither cross nor share a point: ear clipping needs a simple polygon.
+bool simple(const Polygon2d& p) {
+  const std::size_t n = p.size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      if ((p[i] - p[j]).squaredNorm() == 0) return false;
+      if (j >= i + 2 && !(i == 0 && j == n - 1) && segments_cross(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n])) return false;
+    }
+  return true;
+}
+
+// A loop through a vertex twice is split there into simple cycles, each in the loop's order.
+std::vector<std::vector<int>> simple_cycles(const std::vector<int>& loop) {
+  std::vector<std::vector<int>> out;
+  std::vector<int> stack;
+  for (int v : loop) {
+    const auto at = std::find(stack.begin(), stack.end(), v);
+    if (at == stack.end()) {
+      stack.push_back(v);
+      continue;
+    }
+    std::vector<int> cycle(at, stack.end());
+    if (cycle.size() >= 3) out.push_back(std::move(cycle));
+    stack.erase(at + 1, stack.end());
+  }
+  if (stack.size() >= 3) out.push_back(std::move(stack));
+  return out;
+}
+
+class Filler {
+ public:
+  Filler(TriangleMesh& mesh, const Points& raw, const CloudIndex& raw_index, const HoleFillingOptions& options)
+      : mesh_(mesh), raw_(raw), index_(raw_index), options_(options), bin_(options.bin_mm), old_vertices_(static_cast<int>(mesh.vertices.rows())) {
+    const EdgeAdjacency adjacency = edge_adjacency(mesh);
+    for (Eigen::Index e = 0; e < adjacency.edges.rows(); ++e) edges_.insert(edge_key(adjacency.edges(e, 0), adjacency.edges(e, 1)));
+    normals_.assign(static_cast<std::size_t>(mesh.vertices.rows()), Vec3::Zero());
+    for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
+      const Vec3 a = vertex(mesh, mesh.faces(f, 0)), b = vertex(mesh, mesh.faces(f, 1)), c = vertex(mesh, mesh.faces(f, 2));
+      const Vec3 n2 = (b - a).cross(c - a);
+      for (int k = 0; k < 3; ++k) normals_[mesh.faces(f, k)] += n2;
+    }
+    for (Vec3& n : normals_)
+      if (n.norm() > 0) n.normalize();
+    dump_ = std::getenv("CMMD_DUMP_FILL") != nullptr;
+    for (const BoundaryLoop& loop : boundary_loops(mesh, adjacency)) loops_.push_back(loop.vertices);
+  }
+
+  HoleFilling run() {
+    HoleFilling out;
+    for (const std::vector<int>& loop : loops_) {
+      for (const std::vector<int>& cycle : simple_cycles(loop)) {
+        double perimeter = 0;
+        for (std::size_t i = 0; i < cycle.size(); ++i) perimeter += (at(cycle[(i + 1) % cycle.size()]) - at(cycle[i])).norm();
+        if (perimeter > options_.max_perimeter_bins * bin_) continue;
+        ++out.loops_examined;
+        if (fill(cycle, perimeter)) ++out.loops_filled;
+      }
+    }
+    const Eigen::Index old_faces = mesh_.faces.rows();
+    mesh_.faces.conservativeResize(old_faces + static_cast<Eigen::Index>(faces_.size()), 3);
+    for (std::size_t f = 0; f < faces_.size(); ++f)
+      for (int k = 0; k < 3; ++k) mesh_.faces(old_faces + static_cast<Eigen::Index>(f), k) = faces_[f][k];
+    mesh_.vertices.conservativeResize(old_vertices_ + static_cast<Eigen::Index>(extra_.size()), 3);
+    for (std::size_t i = 0; i < extra_.size(); ++i) mesh_.vertices.row(old_vertices_ + static_cast<Eigen::Index>(i)) = extra_[i].transpose();
+    if (mesh_.vertex_normals.rows() > 0) mesh_.vertex_normals.resize(0, 3);
+    out.faces_added = faces_.size();
+    out.vertices_added = extra_.size();
+    return out;
+  }
+
+ private:
+  Vec3 at(int id) const { return id < old_vertices_ ? vertex(mesh_, id) : extra_[static_cast<std::size_t>(id - old_vertices_)]; }
+
+  void say(const std::vector<int>& cycle, double perimeter, const char* what, double value) const {
+    if (!dump_) return;
+    Vec3 c = Vec3::Zero();
+    for (int i : cycle) c += at(i) / static_cast<double>(cycle.size());
+    std::printf("fill: loop %zu v %.2f mm at (%.1f %.1f %.1f): %s %.3f\n", cycle.size(), perimeter, c.x(), c.y(), c.z(), what, value);
+  }
+
+  // Ear clipping of `ids` (a polygon in loop order) seen along ±normal, the triangles wound against the
+  // loop; no diagonal may already be an edge. A few starting corners are tried: each gives other diagonals.
+  bool clip(const std::vector<int>& ids, Vec3 normal, const std::vector<Vec3>& x, std::vector<Face>& out) const {
+    const std::size_t n = ids.size();
+    Vec3 newell = Vec3::Zero(), around = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) newell += x[i].cross(x[(i + 1) % n]);
+    // The surface lies left of the loop: beside a hole it faces against the loop's Newell normal, beside
+    // a patch's own outline with it. Filling an outline would lay a second sheet over the patch.
+    for (int id : ids)
+      if (id < old_vertices_) around += normals_[id];
+    if (!(around.dot(newell) < 0)) return false;
+    if (newell.dot(normal) < 0) normal = -normal;
+    const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+    Polygon2d polygon;
+    for (const Vec3& p : x) polygon.emplace_back((p - x[0]).dot(t1), (p - x[0]).dot(t2));
+    if (!simple(polygon)) return false;
+    for (std::size_t start = 0; start < std::min<std::size_t>(n, 6); ++start) {
+      Polygon2d rotated(polygon.begin() + static_cast<std::ptrdiff_t>(start), polygon.end());
+      rotated.insert(rotated.end(), polygon.begin(), polygon.begin() + static_cast<std::ptrdiff_t>(start));
+      std::vector<std::array<int, 3>> triangles;
+      try {
+        triangles = triangulate_polygon(rotated, {});
+      } catch (const std::invalid_argument&) {
+        return false;
+      }
+      if (triangles.size() != n - 2) return false;
+      bool fresh = true;
+      std::vector<Face> faces;
+      for (const auto& t : triangles) {
+        const int i0 = static_cast<int>((t[0] + start) % n), i1 = static_cast<int>((t[1] + start) % n), i2 = static_cast<int>((t[2] + start) % n);
+        const Face f{ids[i0], ids[i2], ids[i1]};  // against the loop
+        for (int k = 0; k < 3; ++k) {
+          const int a = (k == 0 ? i0 : k == 1 ? i1 : i2), b = (k == 0 ? i1 : k == 1 ? i2 : i0);
+          const bool side = (a + 1) % static_cast<int>(n) == b || (b + 1) % static_cast<int>(n) == a;
+          if (!side && edges_.contains(edge_key(ids[a], ids[b]))) fresh = false;
+        }
+        faces.push_back(f);
+      }
+      if (fresh) {
+        out.insert(out.end(), faces.begin(), faces.end());
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // Fraction of the patch's sample points (every ≈ B/2, corners left out: they are mesh vertices) that
+  // have a raw point within reach.
+  double support(const std::vector<Face>& faces) const {
+    const double spacing = 0.5 * bin_, reach = options_.support_bins * bin_;
+    std::size_t samples = 0, backed = 0;
+    std::vector<int> ids;
+    std::vector<double> squared;
+    const auto probe = [&](const Vec3& x) {
+      ++samples;
+      index_.nearest(x, 1, ids, squared);
+      backed += !squared.empty() && squared.front() <= reach * reach;
+    };
+    for (const Face& f : faces) {
+      const Vec3 t[3] = {at(f[0]), at(f[1]), at(f[2])};
+      const double longest = std::max({(t[1] - t[0]).norm(), (t[2] - t[1]).norm(), (t[0] - t[2]).norm()});
+      const int n = std::clamp(static_cast<int>(std::ceil(longest / spacing)), 1, 64);
+      probe((t[0] + t[1] + t[2]) / 3);
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; i + j <= n; ++j) {
+          const int k = n - i - j;
+          if (i == n || j == n || k == n) continue;
+          probe((i * t[0] + j * t[1] + k * t[2]) / n);
+        }
+    }
+    return samples == 0 ? 1.0 : static_cast<double>(backed) / static_cast<double>(samples);
+  }
+
+  // The patch closes the loop and nothing else: each loop side gets one facet (wound against it), each
+  // new edge two of opposite winding, no edge of the mesh another. Whatever the construction, the mesh
+  // stays edge-manifold and consistently oriented.
+  bool closes_exactly(const std::vector<Face>& faces, const std::vector<int>& cycle) const {
+    std::unordered_map<std::uint64_t, int> directed;
+    for (const Face& f : faces)
+      for (int k = 0; k < 3; ++k) {
+        if (f[k] == f[(k + 1) % 3]) return false;
+        const std::uint64_t key = (std::uint64_t(std::uint32_t(f[k])) << 32) | std::uint32_t(f[(k + 1) % 3]);
+        if (++directed[key] > 1) return false;
+      }
+    std::unordered_set<std::uint64_t> sides;
+    const std::size_t n = cycle.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const int a = cycle[i], b = cycle[(i + 1) % n];
+      // The loop runs a → b in its facet; the patch must have b → a.
+      if (!directed.contains((std::uint64_t(std::uint32_t(b)) << 32) | std::uint32_t(a))) return false;
+      sides.insert(edge_key(a, b));
+    }
+    for (const auto& [key, count] : directed) {
+      const int from = static_cast<int>(key >> 32), to = static_cast<int>(key & 0xffffffffu);
+      const std::uint64_t undirected = edge_key(from, to);
+      if (sides.contains(undirected)) {
+        if (directed.contains((std::uint64_t(std::uint32_t(to)) << 32) | std::uint32_t(from))) return false;
+        continue;
+      }
+      if (edges_.contains(undirected)) return false;
+      if (!directed.contains((std::uint64_t(std::uint32_t(to)) << 32) | std::uint32_t(from))) return false;
+    }
+    return true;
+  }
+
+  bool commit(const std::vector<Face>& faces, const std::vector<Vec3>& points, const std::vector<int>& cycle,
+              double perimeter, const char* how) {
+    if (!closes_exactly(faces, cycle)) {
+      say(cycle, perimeter, "patch would not close the loop exactly", 0);
+      failed_.push_back(cycle);
+      return false;
+    }
+    // The new points sit at ids after those already added.
+    const std::size_t before = extra_.size();
+    extra_.insert(extra_.end(), points.begin(), points.end());
+    const double backed = support(faces);
+    say(cycle, perimeter, backed < options_.min_support ? "unsupported" : how, backed);
+    if (backed < options_.min_support) {
+      extra_.resize(before);
+      return false;
+    }
+    for (const Face& f : faces) {
+      faces_.push_back(f);
+      for (int k = 0; k < 3; ++k) edges_.insert(edge_key(f[k], f[(k + 1) % 3]));
+    }
+    return true;
+  }
+
+  bool fill(const std::vector<int>& cycle, double perimeter) {
+    std::vector<Vec3> x;
+    for (int i : cycle) x.push_back(at(i));
+    const std::size_t n = cycle.size();
+    // The faces around the loop: one group of normals, or two a crease apart.
+    Vec3 seeds[2] = {normals_[cycle[0]], normals_[cycle[0]]};
+    double worst = 2;
+    for (int i : cycle)
+      if (normals_[i].dot(seeds[0]) < worst) worst = normals_[i].dot(seeds[0]), seeds[1] = normals_[i];
+    std::vector<int> group(n, 0);
+    for (int round = 0; round < 5; ++round) {
+      Vec3 sums[2] = {Vec3::Zero(), Vec3::Zero()};
+      for (std::size_t i = 0; i < n; ++i) {
+        group[i] = normals_[cycle[i]].dot(seeds[1]) > normals_[cycle[i]].dot(seeds[0]) ? 1 : 0;
+        sums[group[i]] += normals_[cycle[i]];
+      }
+      for (int k = 0; k < 2; ++k)
+        if (sums[k].norm() > 0) seeds[k] = sums[k].normalized();
+    }
+    const bool bent = seeds[0].dot(seeds[1]) < std::cos(options_.crease_angle_deg * std::numbers::pi / 180) &&
+                      std::count(group.begin(), group.end(), 0) >= 2 && std::count(group.begin(), group.end(), 1) >= 2;
+    if (bent && fill_bent(cycle, x, seeds, perimeter)) return true;
+    Vec3 newell = Vec3::Zero(), centre = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) newell += x[i].cross(x[(i + 1) % n]), centre += x[i] / static_cast<double>(n);
+    // A flat patch only where the loop is flat: across a crease it would chamfer the edge.
+    double off_plane = 0;
+    if (newell.norm() > 0)
+      for (const Vec3& p : x) off_plane = std::max(off_plane, std::abs((p - centre).dot(newell.normalized())));
+    std::vector<Face> faces;
+    if (newell.norm() > 0 && off_plane <= options_.flatness_bins * bin_ && clip(cycle, newell.normalized(), x, faces))
+      return commit(faces, {}, cycle, perimeter, "filled flat");
+    say(cycle, perimeter, bent ? "across a crease, not filled" : "not flat, an outline, not simple or no fresh diagonal", 0);
+    failed_.push_back(cycle);
+    return false;
+  }
+
+  // Two faces: each side's vertices by the nearer plane, which must take one run of the loop each; the
+  // crease line joins the two crossings through new vertices every ≤ B, and each side is clipped in its plane.
+  bool fill_bent(const std::vector<int>& cycle, const std::vector<Vec3>& x, const Vec3 (&seed)[2], double perimeter) {
+    const std::size_t n = cycle.size();
+    std::vector<int> side(n);
+    Vec3 normal[2];
+    double offset[2];
+    for (int round = 0; round < 2; ++round) {
+      for (int k = 0; k < 2; ++k) {
+        normal[k] = round == 0 ? seed[k] : normal[k];
+        std::vector<double> d;
+        for (std::size_t i = 0; i < n; ++i)
+          if (round == 0 ? normals_[cycle[i]].dot(seed[k]) >= normals_[cycle[i]].dot(seed[1 - k]) : side[i] == k)
+            d.push_back(normal[k].dot(x[i]));
+        if (d.empty()) return false;
+        std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+        offset[k] = d[d.size() / 2];
+      }
+      for (std::size_t i = 0; i < n; ++i)
+        side[i] = std::abs(normal[1].dot(x[i]) - offset[1]) < std::abs(normal[0].dot(x[i]) - offset[0]) ? 1 : 0;
+    }
+    {
+      // A vertex on both planes (at the crease, within the noise) takes the side of the run it follows.
+      std::vector<char> either(n, 0);
+      for (std::size_t i = 0; i < n; ++i)
+        either[i] = std::abs(normal[0].dot(x[i]) - offset[0]) < 0.3 * bin_ && std::abs(normal[1].dot(x[i]) - offset[1]) < 0.3 * bin_;
+      std::size_t decided = n;
+      for (std::size_t i = 0; i < n; ++i)
+        if (!either[i]) decided = i;
+      if (decided < n)
+        for (std::size_t s = 1; s < n; ++s) {
+          const std::size_t i = (decided + s) % n;
+          if (either[i]) side[i] = side[(i + n - 1) % n];
+        }
+    }
+    // The faces' planes from the raw points around the loop, each away from the other face: the mesh's
+    // normals are noisy and blend the two faces, and the crease line must be where the scan says.
+    {
+      Vec3 centre = Vec3::Zero();
+      for (const Vec3& p : x) centre += p / static_cast<double>(n);
+      double radius = 0;
+      for (const Vec3& p : x) radius = std::max(radius, (p - centre).norm());
+      const std::vector<int> near = index_.within(centre, radius + bin_);
+      for (int k = 0; k < 2; ++k) {
+        std::vector<Vec3> on;
+        for (int id : near) {
+          const Vec3 p = raw_.row(id).transpose();
+          if (std::abs(normal[k].dot(p) - offset[k]) < 0.25 * bin_ && std::abs(normal[1 - k].dot(p) - offset[1 - k]) > 0.5 * bin_)
+            on.push_back(p);
+        }
+        if (on.size() < 10) continue;
+        Vec3 mean = Vec3::Zero();
+        for (const Vec3& p : on) mean += p / static_cast<double>(on.size());
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (const Vec3& p : on) cov += (p - mean) * (p - mean).transpose();
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+        if (!(eig.eigenvalues()(1) > 4 * eig.eigenvalues()(0))) continue;  // not a plane patch
+        Vec3 fitted = eig.eigenvectors().col(0).normalized();
+        if (fitted.dot(normal[k]) < 0) fitted = -fitted;
+        if (fitted.dot(normal[k]) < std::cos(0.35)) continue;  // not the face the loop's facets saw
+        normal[k] = fitted;
+        offset[k] = fitted.dot(mean);
+      }
+    }
+    // One run of each side around the loop.
+    std::size_t switches = 0, first = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      if (side[i] != side[(i + n - 1) % n]) {
+        ++switches;
+        if (side[i] == 0) first = i;
+      }
+    if (switches != 2) return false;
+    std::vector<int> run[2];
+    std::vector<Vec3> run_x[2];
+    for (std::size_t s = 0; s < n; ++s) {
+      const std::size_t i = (first + s) % n;
+      run[side[i]].push_back(cycle[i]);
+      run_x[side[i]].push_back(x[i]);
+    }
+    if (run[0].size() < 2 || run[1].size() < 2) return false;  // a lone vertex off the face is noise, not a side
+    const double c = normal[0].dot(normal[1]), det = 1 - c * c;
+    if (det < 1e-6) return false;
+    const auto on_line = [&](const Vec3& p) {  // the point of the crease line nearest p
+      const double r0 = offset[0] - normal[0].dot(p), r1 = offset[1] - normal[1].dot(p);
+      return Vec3(p + (r0 - c * r1) / det * normal[0] + (r1 - c * r0) / det * normal[1]);
+    };
+    // Crossing 1: from the side-0 run's end to the side-1 run's start; crossing 2: back.
+    const auto crossing = [&](int a, const Vec3& xa, int b, const Vec3& xb, std::vector<Vec3>& points, bool& is_new) {
+      const Vec3 pa = on_line(xa), pb = on_line(xb);
+      if ((pa - xa).norm() < 0.25 * bin_) return is_new = false, a;
+      if ((pb - xb).norm() < 0.25 * bin_) return is_new = false, b;
+      points.push_back(on_line(0.5 * (xa + xb)));
+      is_new = true;
+      return -1;
+    };
+    std::vector<Vec3> points;
+    bool new1 = false, new2 = false;
+    int x1 = crossing(run[0].back(), run_x[0].back(), run[1].front(), run_x[1].front(), points, new1);
+    const Vec3 p1 = new1 ? points.back() : at(x1);
+    int x2 = crossing(run[1].back(), run_x[1].back(), run[0].front(), run_x[0].front(), points, new2);
+    const Vec3 p2 = new2 ? points.back() : at(x2);
+    const int base = old_vertices_ + static_cast<int>(extra_.size());
+    if (new1) x1 = base;
+    if (new2) x2 = base + (new1 ? 1 : 0);
+    if (x1 == x2) return false;
+    // Interior chain points from p1 to p2, on the line.
+    const double length = (p2 - p1).norm();
+    if (length > 0.5 * options_.max_perimeter_bins * bin_) return false;
+    const int segments = std::max(1, static_cast<int>(std::ceil(length / bin_)));
+    std::vector<int> chain{x1};
+    std::vector<Vec3> chain_x{p1};
+    for (int k = 1; k < segments; ++k) {
+      const Vec3 p = on_line(p1 + (p2 - p1) * (static_cast<double>(k) / segments));
+      chain.push_back(base + static_cast<int>(points.size()));
+      chain_x.push_back(p);
+      points.push_back(p);
+    }
+    chain.push_back(x2);
+    chain_x.push_back(p2);
+    if (chain.size() == 2 && edges_.contains(edge_key(x1, x2))) return false;
+    // Side 0: its run, then the chain x1 → x2; side 1: its run, then the chain back.
+    std::vector<int> poly[2];
+    std::vector<Vec3> poly_x[2];
+    for (int k = 0; k < 2; ++k) {
+      poly[k] = run[k];
+      poly_x[k] = run_x[k];
+      std::vector<int> ch = chain;
+      std::vector<Vec3> ch_x = chain_x;
+      if (k == 1) std::reverse(ch.begin(), ch.end()), std::reverse(ch_x.begin(), ch_x.end());
+      for (std::size_t i = 0; i < ch.size(); ++i) {
+        if (std::find(poly[k].begin(), poly[k].end(), ch[i]) != poly[k].end()) continue;  // a run's own end on the line
+        poly[k].push_back(ch[i]);
+        poly_x[k].push_back(ch_x[i]);
+      }
+      if (poly[k].size() < 3) return false;
+    }
+    std::vector<Face> faces;
+    if (!clip(poly[0], normal[0], poly_x[0], faces) || !clip(poly[1], normal[1], poly_x[1], faces)) return false;
+    // A new crossing point lies off the loop side it stands for: that side's twin is a facet to it.
+    if (new1) faces.push_back({run[1].front(), run[0].back(), x1});
+    if (new2) faces.push_back({run[0].front(), run[1].back(), x2});
+    return commit(faces, points, cycle, perimeter, "filled across a crease");
+  }
+
+ public:
+  std::vector<std::vector<int>> failed_;  // loops no patch could close: their ragged rims are cut back
+
+ private:
+  TriangleMesh& mesh_;
+  const Points& raw_;
+  const CloudIndex& index_;
+  const HoleFillingOptions& options_;
+  double bin_;
+  int old_vertices_;
+  bool dump_ = false;
+  std::unordered_set<std::uint64_t> edges_;
+  std::vector<Vec3> normals_;
+  std::vector<std::vector<int>> loops_;
+  std::vector<Face> faces_;
+  std::vector<Vec3> extra_;
+};
+
+}  // namespace
+
+HoleFilling fill_false_holes(TriangleMesh& mesh, const Points& raw, const CloudIndex& raw_index,
+                             const HoleFillingOptions& options) {
+  HoleFilling out;
+  if (mesh.faces.rows() == 0 || raw.rows() == 0 || !(options.bin_mm > 0) || !std::isfinite(options.bin_mm)) return out;
+  for (int round = 0; round < options.rounds; ++round) {
+    Filler filler(mesh, raw, raw_index, options);
+    const HoleFilling r = filler.run();
+    out.loops_examined += r.loops_examined;
+    out.loops_filled += r.loops_filled;
+    out.faces_added += r.faces_added;
+    out.vertices_added += r.vertices_added;
+    if (filler.failed_.empty() || round + 1 >= options.rounds) break;
+    // A loop no patch closes has a ragged rim (facets folded by the noise, a sliver fan): its vertices'
+    // facets go, and the next round fills the wider, cleaner loop. Their vertices may be left unused.
+    std::unordered_set<int> rim;
+    for (const auto& cycle : filler.failed_) rim.insert(cycle.begin(), cycle.end());
+    Triangles kept(mesh.faces.rows(), 3);
+    Eigen::Index count = 0;
+    for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
+      if (!rim.contains(mesh.faces(f, 0)) && !rim.contains(mesh.faces(f, 1)) && !rim.contains(mesh.faces(f, 2)))
+        kept.row(count++) = mesh.faces.row(f);
+    out.faces_removed += static_cast<std::size_t>(mesh.faces.rows() - count);
+    kept.conservativeResize(count, 3);
+    mesh.faces = std::move(kept);
+  }
+  return out;
+}
+
+}  // namespace cmm::geometry
