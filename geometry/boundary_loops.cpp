@@ -1,7 +1,8 @@
 // Loops follow boundary half-edges head to tail. Classification uses orientation: seen along the
 // surface normal next to it, an outer boundary runs counter-clockwise and a hole clockwise. Where
-// the surface stands edge-on to the loop (a tube's open end) that is undecided, and the longest
-// loop of the component is taken as its outer boundary.
+// the surface stands edge-on to the loop (a tube's open end, a box's open bottom: the normals next
+// to it turn all the way round and cancel) that is undecided, and the longest loop of the component
+// is taken as its outer boundary.
 #include "geometry/boundary_loops.hpp"
 
 #include <algorithm>
@@ -44,9 +45,11 @@ std::vector<BoundaryLoop> boundary_loops(const TriangleMesh& mesh, const EdgeAdj
   const std::vector<int> component = face_components(mesh, adjacency, &component_count);
 
   std::vector<BoundaryLoop> loops;
+  std::vector<double> coherence;  // |Σ facet normal| / Σ |facet normal| next to each loop
   while (!outgoing.empty()) {
     BoundaryLoop loop;
     Vec3 normal_sum = Vec3::Zero();
+    double length_sum = 0;
     auto it = outgoing.begin();
     const int start = it->first;
     loop.component = component[it->second / 3];
@@ -55,6 +58,7 @@ std::vector<BoundaryLoop> boundary_loops(const TriangleMesh& mesh, const EdgeAdj
       const int from = mesh.faces(f, k), to = mesh.faces(f, (k + 1) % 3);
       const Vec3 a = vertex(mesh, mesh.faces(f, 0)), b = vertex(mesh, mesh.faces(f, 1)), c = vertex(mesh, mesh.faces(f, 2));
       normal_sum += (b - a).cross(c - a);
+      length_sum += (b - a).cross(c - a).norm();
       loop.vertices.push_back(from);
       loop.half_edges.push_back(h);
       loop.perimeter += (vertex(mesh, to) - vertex(mesh, from)).norm();
@@ -63,6 +67,7 @@ std::vector<BoundaryLoop> boundary_loops(const TriangleMesh& mesh, const EdgeAdj
       it = outgoing.find(to);
     }
     if (normal_sum.norm() > 0) loop.surface_normal = normal_sum.normalized();
+    coherence.push_back(length_sum > 0 ? normal_sum.norm() / length_sum : 0.0);
     loops.push_back(std::move(loop));
   }
 
@@ -74,7 +79,7 @@ std::vector<BoundaryLoop> boundary_loops(const TriangleMesh& mesh, const EdgeAdj
   }
   for (int i = 0; i < static_cast<int>(loops.size()); ++i) {
     const Orientation o = loop_orientation(mesh, loops[i]);
-    if (o.normal_agreement > 0.5)
+    if (coherence[i] > 0.5 && o.normal_agreement > 0.5)
       loops[i].kind = o.signed_area > 0 ? LoopKind::outer : LoopKind::hole;
     else
       loops[i].kind = longest[loops[i].component] == i ? LoopKind::outer : LoopKind::hole;

@@ -1,6 +1,7 @@
 // Topology on hand-built meshes whose answers are known by construction, and on the shared CGAL meshes.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 
 #include "geometry/boundary_loops.hpp"
@@ -69,6 +70,30 @@ TEST(MeshTopology, SquareHoleIsClassifiedAsHole) {
   }
   EXPECT_EQ(holes, 1);
   EXPECT_EQ(topology_report(m, adjacency).euler_characteristic, 0);
+}
+
+// A box open at the bottom whose walls lean in by 2° (a scan's noise leans them either way): the normals
+// next to the bottom loop turn all the way round and nearly cancel, and what is left of them (down)
+// must not decide the loop's kind. It is the outer boundary, the component's only loop.
+TEST(MeshTopology, TheOpenBottomOfABoxIsItsOuterBoundaryWhicheverWayTheWallsLean) {
+  for (double lean_deg : {-2.0, 2.0}) {
+    const double e = 10 * std::tan(lean_deg * 3.141592653589793 / 180);  // the bottom rim's inset
+    TriangleMesh m;
+    m.vertices.resize(8, 3);
+    m.vertices << 0, 0, 10, 10, 0, 10, 10, 10, 10, 0, 10, 10,  //
+        e, e, 0, 10 - e, e, 0, 10 - e, 10 - e, 0, e, 10 - e, 0;
+    m.faces.resize(10, 3);
+    m.faces.row(0) << 0, 1, 2;
+    m.faces.row(1) << 0, 2, 3;
+    for (int i = 0; i < 4; ++i) {
+      const int a = i, b = (i + 1) % 4, c = 4 + i, d = 4 + (i + 1) % 4;
+      m.faces.row(2 + 2 * i) << c, d, b;
+      m.faces.row(3 + 2 * i) << c, b, a;
+    }
+    const auto loops = boundary_loops(m, edge_adjacency(m));
+    ASSERT_EQ(loops.size(), 1u);
+    EXPECT_EQ(loops[0].kind, LoopKind::outer) << "walls leaning " << lean_deg << "°";
+  }
 }
 
 TEST(MeshTopology, TwoPiecesAreTwoComponents) {
