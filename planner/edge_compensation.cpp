@@ -73,6 +73,13 @@ FacePlane plane_from(const std::vector<Vec3>& centres, const Vec3& nominal, doub
   if (fit) {
     const Scatter s = scatter_of(centres);
     Vec3 normal = s.eigenvectors.col(0);
+    if (centres.size() == 2) {
+      // Two touches across the edge fix the face's tilt across it, the one that moves the edge: the
+      // normal nearest the nominal one that is square to the line through them. The nominal normal
+      // keeps its tilt along the edge, which only slides the point along the edge.
+      const Vec3 across = (centres[1] - centres[0]).normalized();
+      normal = (nominal - nominal.dot(across) * across).normalized();
+    }
     if (normal.dot(nominal) < 0) normal = -normal;
     plane.normal = normal;
     plane.normal_fitted = true;
@@ -90,10 +97,11 @@ FacePlane plane_from(const std::vector<Vec3>& centres, const Vec3& nominal, doub
 }
 
 bool should_fit(const std::vector<Vec3>& centres, double sigma) {
-  if (centres.size() < 3) return false;
+  if (centres.size() < 2) return false;
   const Scatter s = scatter_of(centres);
-  // RMS spread across the centres' best line; noise tilts a fitted normal by about σ / spread.
-  const double spread = std::sqrt(std::max(0.0, s.eigenvalues(1)) / centres.size());
+  // RMS spread across the centres' best line (for two, along their line: only the tilt across the
+  // edge is fitted); noise tilts a fitted normal by about σ / spread.
+  const double spread = std::sqrt(std::max(0.0, s.eigenvalues(centres.size() == 2 ? 2 : 1)) / centres.size());
   return spread >= std::max(100 * sigma, 1e-6);
 }
 
@@ -261,7 +269,7 @@ FacePlane fit_face_plane(const FaceTouches& touches, double ball_radius_mm, doub
   if (notes) {
     if (!fit) {
       notes->push_back(name + ": " + std::to_string(touches.centres.size()) +
-                       (touches.centres.size() >= 3 ? " touches too close to a line" : " touch(es)") +
+                       (touches.centres.size() >= 3 ? " touches too close to a line" : touches.centres.size() == 2 ? " touches too close together" : " touch") +
                        ", its nominal normal taken as exact; its error is not in the uncertainty");
     } else if (plane.normal_change_rad > 10 * std::numbers::pi / 180) {
       std::ostringstream out;

@@ -104,9 +104,11 @@ struct FacePlane {
 };
 
 // Plane through the touches: fitted when there are at least three whose spread across their best
-// line is at least 100σ (so noise tilts the normal by at most 10 mrad); otherwise the nominal normal
-// is taken as exact and only the offset is measured (the mean over the touches). `face` names the
-// face in errors and notes ("up", "down").
+// line is at least 100σ (so noise tilts the normal by at most 10 mrad); with two at least 200σ apart,
+// only the tilt along their line is fitted (the normal nearest the nominal one square to it: two
+// touches across an edge measure the tilt that moves the edge, which a scan's side normals get wrong
+// by degrees); otherwise the nominal normal is taken as exact and only the offset is measured (the
+// mean over the touches). `face` names the face in errors and notes ("up", "down").
 FacePlane fit_face_plane(const FaceTouches& touches, double ball_radius_mm, double trigger_sigma_mm, int id,
                          std::string_view face, std::vector<std::string>* notes = nullptr);
 
