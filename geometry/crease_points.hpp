@@ -1,6 +1,7 @@
 // Sharp creases of a raw scan, where two smooth faces meet at an angle: found from the local fits,
-// placed on the intersection of the two faces' fitted planes and sampled every bin, so that the
-// triangulation can carry each crease as a chain of mesh edges instead of chamfering it.
+// placed on the intersection of the two faces' fitted planes, sampled every bin and smoothed along
+// the crease, so that the triangulation can carry each crease as a chain of mesh edges instead of
+// chamfering it.
 #pragma once
 
 #include <array>

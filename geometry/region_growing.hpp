@@ -40,7 +40,8 @@ struct CreaseLine {
 struct Triangulation {
   // vertices: the thinned points the facets use, in order, then the crease points they use, then the
   // points the hole filling put on the creases its patches cross. Thinned points in a crease's band
-  // (within B/2 of it) and crowded ones (min_spacing_bins) are left out.
+  // (within B/2 of it) and crowded ones (min_spacing_bins) are left out; those within 3B of a crease
+  // lie on the plane of their face there.
   TriangleMesh mesh;
   std::vector<int> thinned_index;  // per mesh vertex: its row in `thinned`, or −1 for a crease point
   std::vector<ScanLoop> loops;
