@@ -25,6 +25,7 @@ class CompensationError : public std::runtime_error {
     bad_input,        // missing, non-finite or non-unit inputs, too few touches
     no_intersection,  // the two touch circles do not meet: the touches cannot be of one edge
     degenerate,       // the inputs fix no unique answer (parallel approaches, collinear touches)
+    beyond_delta,     // the point came out farther from its reference than the δ its touches assumed
   };
   // what() reads "edge point 12: trigger centres 2.31 mm apart, more than 2r = 2 mm: ..."; a
   // negative id leaves the number out.

@@ -123,6 +123,15 @@ EdgeResult compensate_edge(const geometry::EdgePoint& point, const EdgePlan& pla
     r.scan = to_scan_frame(*r.machine, c.T_M_S);
     r.deviation = signed_deviation(r.scan->position, point.position, point.n_up, point.n_down.value_or(Vec3::Zero()),
                                    point.tangent);
+    // The window guarantees a touch on the edge, and the faces' touches land on the faces, only for an
+    // edge within δ of the reference point. A point found farther away says that assumption broke (a
+    // scan's defect put the reference off): the touches may have met a face, and the figure is refused.
+    const double off = (r.scan->position - point.position).norm();
+    if (plan.delta_mm > 0 && off > plan.delta_mm + 3 * r.scan->sigma_mm) {
+      throw CompensationError("edge point", point.id, CompensationError::Reason::beyond_delta,
+                              "measured " + fixed(off, 3) + " mm from its reference point, beyond the δ " +
+                                  fixed(plan.delta_mm, 3) + " mm its touches were planned for: a touch may have met a face instead of the edge");
+    }
   });
   return r;
 }

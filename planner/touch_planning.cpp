@@ -132,6 +132,7 @@ EdgePlan plan_edge_point(const geometry::EdgePoint& point, const Eigen::Isometry
   // the mesh's crease is itself off the true edge (a coarse fan's chord), the point's δ grows by it.
   TouchPlanOptions o = options;
   o.delta = geometry::delta_at(point, options.delta);
+  plan.delta_mm = o.delta;
   const WindowResult window = probe_window(point, o.radius, o.delta, o.window);
   if (window.usable) {
     plan.window = window.window;

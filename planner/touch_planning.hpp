@@ -42,6 +42,7 @@ struct EdgePlan {
   std::array<double, 2> beta_rad = {0, 0};  // angles of the two touches from the axis (two_touch)
   std::vector<Touch> touches;         // ids are assigned later, in M
   std::string reason;  // why not measurable, or why faces instead of two touches
+  double delta_mm = 0;  // the bound on the reference point's error its window and touches were made for
 };
 
 // Plans one edge point given in S; touches are placed in M through T_M_S.

