@@ -377,14 +377,84 @@ class ChainWalker {
   std::vector<char> taken_;
 };
 
-// The corner a chain's end runs into, if any: ahead of the end, on its line, within reach.
+// A chain's end and the direction it runs out in there (away from the chain).
+struct ChainEnd {
+  Vec3 position, outward;
+};
+
+ChainEnd chain_end(const Chain& chain, const std::vector<LocalCrease>& local, bool back) {
+  const std::vector<int>& s = chain.samples;
+  const LocalCrease& end = local[back ? s.back() : s.front()];
+  if (s.size() < 2) return {end.position, back ? end.direction : Vec3(-end.direction)};
+  // Over up to three samples: one step's direction carries the noise of both its points.
+  const std::size_t reach = std::min<std::size_t>(3, s.size() - 1);
+  const Vec3 inner = local[back ? s[s.size() - 1 - reach] : s[reach]].position;
+  return {end.position, (end.position - inner).normalized()};
+}
+
+// The walk breaks a crease where a stretch of it found no local line (noise, a sparse row of one
+// view) or where it turns faster than its lateral reach: the pieces are joined end to end where one
+// runs on into the other across a gap of at most 2.5 B (or overlaps it by up to B; its samples behind
+// the join are dropped), and a chain whose two ends meet is closed (a bore's rim).
+void join_chains(std::vector<Chain>& chains, const std::vector<LocalCrease>& local, double bin) {
+  const auto fits = [&](const ChainEnd& a, const LocalCrease& la, const ChainEnd& b, const LocalCrease& lb, double& gap) {
+    const Vec3 d = b.position - a.position;
+    const double along = d.dot(a.outward), lateral = (d - along * a.outward).norm();
+    gap = d.norm();
+    return gap <= 2.5 * bin && along >= -bin && lateral <= 0.75 * bin + 0.3 * std::max(0.0, along) &&
+           b.outward.dot(-a.outward) >= std::cos(std::numbers::pi / 4) && same_crease(la, lb, cos_deg(30));
+  };
+  for (;;) {
+    // The closest pair of fitting ends: chain i's back onto chain j's front (j may be reversed).
+    int best_i = -1, best_j = -1;
+    bool reverse_j = false;
+    double best_gap = 1e300;
+    for (std::size_t i = 0; i < chains.size(); ++i) {
+      if (chains[i].closed) continue;
+      const ChainEnd back = chain_end(chains[i], local, true);
+      const LocalCrease& lb = local[chains[i].samples.back()];
+      for (std::size_t j = 0; j < chains.size(); ++j) {
+        if (chains[j].closed || (j == i && chains[i].samples.size() < 6)) continue;
+        for (bool rev : {false, true}) {
+          if (j == i && rev) continue;
+          const ChainEnd front = chain_end(chains[j], local, rev);
+          double gap = 0;
+          if (fits(back, lb, front, local[rev ? chains[j].samples.back() : chains[j].samples.front()], gap) && gap < best_gap)
+            best_gap = gap, best_i = static_cast<int>(i), best_j = static_cast<int>(j), reverse_j = rev;
+        }
+      }
+    }
+    if (best_i < 0) return;
+    Chain& a = chains[static_cast<std::size_t>(best_i)];
+    if (best_i == best_j) {
+      // Samples of the back that ran past the front would fold the ring back on itself.
+      while (a.samples.size() > 6) {
+        const ChainEnd back = chain_end(a, local, true);
+        if ((local[a.samples.front()].position - back.position).dot(back.outward) >= 0.25 * bin) break;
+        a.samples.pop_back();
+      }
+      a.closed = true;
+      continue;
+    }
+    Chain b = chains[static_cast<std::size_t>(best_j)];
+    if (reverse_j) std::reverse(b.samples.begin(), b.samples.end());
+    const ChainEnd end = chain_end(a, local, true);
+    std::size_t skip = 0;
+    while (skip < b.samples.size() && (local[b.samples[skip]].position - end.position).dot(end.outward) < 0.25 * bin) ++skip;
+    a.samples.insert(a.samples.end(), b.samples.begin() + static_cast<std::ptrdiff_t>(skip), b.samples.end());
+    chains.erase(chains.begin() + best_j);
+  }
+}
+
+// The corner a chain's end runs into, if any: within reach and ahead of the end, inside a cone of 45°
+// about its direction (the last samples before a corner see the third face and turn).
 int corner_ahead(const std::vector<CreasePoint>& corners, const Vec3& end, const Vec3& t, double bin) {
   int best = -1;
   double best_d = 3.5 * bin;
   for (std::size_t k = 0; k < corners.size(); ++k) {
     const Vec3 d = corners[k].position - end;
     const double along = d.dot(t);
-    if (along < -0.2 * bin || (d - along * t).norm() > 0.5 * bin) continue;
+    if (along < -0.2 * bin || (d - along * t).norm() > 0.5 * bin + std::max(0.0, along)) continue;
     if (d.norm() < best_d) best_d = d.norm(), best = static_cast<int>(k);
   }
   return best;
@@ -562,19 +632,16 @@ Creases find_creases(const Points& raw, const std::vector<LocalSurface>& fits, c
   }
   if (lines.empty()) return out;
   std::vector<Chain> chains = ChainWalker(lines, bin).chains();
+  join_chains(chains, lines, bin);
   const std::vector<CreasePoint> corners(out.points.begin(), out.points.end());
   for (Chain& chain : chains) {
     if (chain.closed) {
       emit_polyline(chain, lines, bin, out);
       continue;
     }
-    const LocalCrease &first = lines[chain.samples.front()], &last = lines[chain.samples.back()];
-    const Vec3 t_back = chain.samples.size() > 1 ? (last.position - lines[chain.samples[chain.samples.size() - 2]].position).normalized()
-                                                 : last.direction;
-    const Vec3 t_front = chain.samples.size() > 1 ? (first.position - lines[chain.samples[1]].position).normalized()
-                                                  : Vec3(-first.direction);
-    chain.corner_front = corner_ahead(corners, first.position, t_front, bin);
-    chain.corner_back = corner_ahead(corners, last.position, t_back, bin);
+    const ChainEnd front = chain_end(chain, lines, false), back = chain_end(chain, lines, true);
+    chain.corner_front = corner_ahead(corners, front.position, front.outward, bin);
+    chain.corner_back = corner_ahead(corners, back.position, back.outward, bin);
     if (chain.corner_back == chain.corner_front) chain.corner_back = -1;
     emit_polyline(chain, lines, bin, out);
   }

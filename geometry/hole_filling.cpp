@@ -167,17 +167,26 @@ class Filler {
     return false;
   }
 
-  // Fraction of the patch's sample points (every ≈ B/2, corners left out: they are mesh vertices) that
-  // have a raw point within reach.
-  double support(const std::vector<Face>& faces) const {
+  // How well the raw cloud lies along a patch: the fraction of its sample points (every ≈ B/2, corners
+  // left out: they are mesh vertices) that have a raw point within reach, and the farthest any sample
+  // is from the cloud (the radius of the largest gap the patch covers).
+  struct Support {
+    double backed = 1;
+    double widest_gap_mm = 0;
+  };
+
+  Support support(const std::vector<Face>& faces) const {
     const double spacing = 0.5 * bin_, reach = options_.support_bins * bin_;
     std::size_t samples = 0, backed = 0;
+    double widest = 0;
     std::vector<int> ids;
     std::vector<double> squared;
     const auto probe = [&](const Vec3& x) {
       ++samples;
       index_.nearest(x, 1, ids, squared);
-      backed += !squared.empty() && squared.front() <= reach * reach;
+      const double d2 = squared.empty() ? 1e300 : squared.front();
+      backed += d2 <= reach * reach;
+      widest = std::max(widest, std::sqrt(d2));
     };
     for (const Face& f : faces) {
       const Vec3 t[3] = {at(f[0]), at(f[1]), at(f[2])};
@@ -191,7 +200,7 @@ class Filler {
           probe((i * t[0] + j * t[1] + k * t[2]) / n);
         }
     }
-    return samples == 0 ? 1.0 : static_cast<double>(backed) / static_cast<double>(samples);
+    return samples == 0 ? Support{} : Support{static_cast<double>(backed) / static_cast<double>(samples), widest};
   }
 
   // The patch closes the loop and nothing else: each loop side gets one facet (wound against it), each
@@ -236,9 +245,12 @@ class Filler {
     // The new points sit at ids after those already added.
     const std::size_t before = extra_.size();
     extra_.insert(extra_.end(), points.begin(), points.end());
-    const double backed = support(faces);
-    say(cycle, perimeter, backed < options_.min_support ? "unsupported" : how, backed);
-    if (backed < options_.min_support) {
+    // Backed nearly everywhere, or a gap no wider than the scan's own sampling voids (a random scan
+    // leaves empty disks of about B; a real opening is empty across its whole width).
+    const Support backing = support(faces);
+    const bool backed = backing.backed >= options_.min_support || backing.widest_gap_mm <= options_.max_gap_bins * bin_;
+    say(cycle, perimeter, backed ? how : "unsupported", backing.backed);
+    if (!backed) {
       extra_.resize(before);
       return false;
     }

@@ -13,7 +13,8 @@ struct HoleFillingOptions {
   double bin_mm = 1;                // the thinning's bin size B
   double max_perimeter_bins = 60;   // longer loops are left alone: a crack that long is no patch to guess
   double support_bins = 1;          // a point of the patch is backed by a raw point this close
-  double min_support = 0.9;         // fraction of the patch's sample points that must be backed
+  double min_support = 0.9;         // fraction of the patch's sample points that must be backed,
+  double max_gap_bins = 1.5;        // or: no sample farther than this from the cloud (a sampling void)
   double crease_angle_deg = 30;     // a loop whose faces turn more than this spans a crease
   double flatness_bins = 0.25;      // a loop filled flat lies within this of its mean plane
   // Rounds of: fill, then cut back the rim facets of the loops no patch closed, and fill again. More

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "geometry/bin_size.hpp"
 #include "geometry/cloud_index.hpp"
@@ -141,8 +142,13 @@ ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanO
   adaptive.bin_mm = report.bin_size_mm;
   adaptive.tolerance_mm = options.tolerance_mm;
   adaptive.cancel = options.cancel;
-  const std::vector<int> kept = options.adaptive ? thin_adaptive(scan.points, fits, adaptive)
-                                                 : thin_uniform(scan.points, report.bin_size_mm, options.cancel);
+  std::vector<int> kept;
+  try {
+    kept = options.adaptive ? thin_adaptive(scan.points, fits, adaptive) : thin_uniform(scan.points, report.bin_size_mm, options.cancel);
+  } catch (const std::invalid_argument& e) {
+    // A bin so small that the cloud's extent overflows the bin keys (--bin-size 1e-300).
+    throw ScanError(name + ": " + e.what());
+  }
   options.cancel.throw_if_requested("thinning");
   Points thinned(static_cast<Eigen::Index>(kept.size()), 3);
   // A kept point goes onto its fitted surface where the fit can be trusted: the triangulation's facets
