@@ -35,6 +35,9 @@ struct FrontOptions {
   double min_angle_deg = 10;
   double fold_angle_deg = 45;        // largest turn between a facet and the one it grows from
   double max_edge_bins = 2.5;        // no edge longer than this many bins (√3 B between neighbour bins, and some)
+  // Per vertex, the longest edge it may have (adaptive bins: its own bin's reach); an edge is no longer
+  // than the smaller of its ends'. Empty: max_edge_bins·bin_mm for all.
+  std::vector<double> reach_mm;
   CancelCheck cancel;
 };
 

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 #include "geometry/advancing_front.hpp"
 #include "geometry/crease_points.hpp"
@@ -48,7 +50,7 @@ std::vector<double> off_surface(const Points& thinned, bool have_fits, const std
 // A noisy surface leaves two points in bins stacked across it; the one nearer the fitted surface is
 // kept first.
 std::vector<int> kept_points(const Points& thinned, const std::vector<double>& off, const Creases& creases, double bin,
-                             double min_spacing) {
+                             const std::vector<double>& min_spacing) {
   const Eigen::Index n = thinned.rows();
   std::vector<char> keep(static_cast<std::size_t>(n), 0);
   std::vector<int> order;
@@ -58,7 +60,7 @@ std::vector<int> kept_points(const Points& thinned, const std::vector<double>& o
   const PointGrid grid(thinned, bin);
   for (int i : order) {
     bool crowded = false;
-    grid.for_each_within(row(thinned, i), min_spacing, [&](int j, double) { crowded |= keep[j] != 0; });
+    grid.for_each_within(row(thinned, i), min_spacing[static_cast<std::size_t>(i)], [&](int j, double) { crowded |= keep[j] != 0; });
     keep[i] = !crowded;
   }
   const auto drop_near = [&](const Vec3& p0, const Vec3& p1) {
@@ -238,12 +240,18 @@ Triangulation triangulate_scan(const Points& thinned, const Points& raw, const s
   Triangulation out;
   const double bin = options.bin_mm;
   if (!(bin > 0) || !std::isfinite(bin)) return out;
+  if (!options.reach_mm.empty() && options.reach_mm.size() != static_cast<std::size_t>(thinned.rows()))
+    throw std::invalid_argument("triangulate_scan: " + std::to_string(options.reach_mm.size()) + " reaches for " +
+                                std::to_string(thinned.rows()) + " thinned points");
   Creases creases;
   if (raw.rows() > 0 && static_cast<Eigen::Index>(raw_fits.size()) == raw.rows())
     creases = find_creases(raw, raw_fits, raw_index, {bin, options.crease_angle_deg, 2, options.cancel});
   const bool have_fits = raw.rows() > 0 && static_cast<Eigen::Index>(raw_fits.size()) == raw.rows();
-  const std::vector<int> kept = kept_points(thinned, off_surface(thinned, have_fits, raw_fits, raw_index), creases, bin,
-                                            options.min_spacing_bins * bin);
+  // Adaptive bins: a point is crowded at half its own bin, not the coarsest one.
+  std::vector<double> min_spacing(static_cast<std::size_t>(thinned.rows()), options.min_spacing_bins * bin);
+  for (std::size_t i = 0; i < options.reach_mm.size() && i < min_spacing.size(); ++i)
+    min_spacing[i] = options.min_spacing_bins * options.reach_mm[i] / options.max_edge_bins;
+  const std::vector<int> kept = kept_points(thinned, off_surface(thinned, have_fits, raw_fits, raw_index), creases, bin, min_spacing);
   const Vertices v = gather_vertices(thinned, kept, creases, raw, raw_fits, raw_index, bin, deg(options.crease_angle_deg));
 
   std::vector<CreaseEdge> crease_edges;
@@ -260,8 +268,12 @@ Triangulation triangulate_scan(const Points& thinned, const Points& raw, const s
   }
   std::vector<char> can_seed(static_cast<std::size_t>(v.x.rows()), 0);
   for (std::size_t i = 0; i < kept.size(); ++i) can_seed[i] = v.surfaces[i].count > 0;
-  const FrontResult grown = grow_front(v.x, v.surfaces, seed_normals(v, raw_normals, raw), can_seed, crease_edges,
-                                       {bin, options.min_angle_deg, options.fold_angle_deg, options.max_edge_bins, options.cancel});
+  FrontOptions front{bin, options.min_angle_deg, options.fold_angle_deg, options.max_edge_bins, {}, options.cancel};
+  if (!options.reach_mm.empty()) {
+    front.reach_mm.assign(static_cast<std::size_t>(v.x.rows()), options.max_edge_bins * bin);
+    for (std::size_t i = 0; i < kept.size(); ++i) front.reach_mm[i] = options.reach_mm[static_cast<std::size_t>(kept[i])];
+  }
+  const FrontResult grown = grow_front(v.x, v.surfaces, seed_normals(v, raw_normals, raw), can_seed, crease_edges, front);
 
   // Compact: only the vertices the facets use, thinned points first.
   std::vector<int> index(static_cast<std::size_t>(v.x.rows()), -1);

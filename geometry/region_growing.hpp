@@ -23,6 +23,9 @@ struct RegionGrowingOptions {
   // Thinned points closer than this many bins to one kept before them are left out: a noisy surface
   // puts points in bins stacked across it, and such pairs would only make slivers and folds.
   double min_spacing_bins = 0.5;
+  // Per thinned point, the longest edge it may have (adaptive bins: max_edge_bins times its own bin);
+  // empty: max_edge_bins·bin_mm for every point. Crease points take max_edge_bins·bin_mm.
+  std::vector<double> reach_mm;
   CancelCheck cancel;
 };
 

@@ -143,8 +143,15 @@ ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanO
   adaptive.tolerance_mm = options.tolerance_mm;
   adaptive.cancel = options.cancel;
   std::vector<int> kept;
+  std::vector<double> reach;  // adaptive: per kept point, the longest edge its bin allows
   try {
-    kept = options.adaptive ? thin_adaptive(scan.points, fits, adaptive) : thin_uniform(scan.points, report.bin_size_mm, options.cancel);
+    if (options.adaptive) {
+      AdaptiveThinning thinned = thin_adaptive(scan.points, fits, adaptive);
+      kept = std::move(thinned.kept);
+      for (int level : thinned.levels) reach.push_back(kMaxEdgeBins * std::ldexp(report.bin_size_mm, level));
+    } else {
+      kept = thin_uniform(scan.points, report.bin_size_mm, options.cancel);
+    }
   } catch (const std::invalid_argument& e) {
     // A bin so small that the cloud's extent overflows the bin keys (--bin-size 1e-300).
     throw ScanError(name + ": " + e.what());
@@ -165,6 +172,8 @@ ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanO
   // Adaptive bins reach B·2^max_level on flat faces, and the growth must join their points too.
   growing.bin_mm = report.bin_size_mm * (options.adaptive ? std::ldexp(1.0, adaptive.max_level) : 1.0);
   growing.max_edge_bins = kMaxEdgeBins;
+  // Adaptive: each point's edges no longer than its own bin allows, so curved parts keep short edges.
+  growing.reach_mm = std::move(reach);
   growing.cancel = options.cancel;
   Triangulation t = triangulate_scan(thinned, scan.points, fits, index, scan.normals, growing);
   clock.done("triangulation");

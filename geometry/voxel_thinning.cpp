@@ -119,7 +119,7 @@ std::vector<int> thin_uniform(const Points& points, double bin_mm, const CancelC
   return kept(bins);
 }
 
-std::vector<int> thin_adaptive(const Points& points, const std::vector<LocalSurface>& fits,
+AdaptiveThinning thin_adaptive(const Points& points, const std::vector<LocalSurface>& fits,
                                const AdaptiveThinningOptions& options) {
   const Grid grid = make_grid(points, options.bin_mm, "adaptive voxel thinning");
   if (fits.size() != static_cast<std::size_t>(points.rows()))
@@ -186,7 +186,13 @@ std::vector<int> thin_adaptive(const Points& points, const std::vector<LocalSurf
     }
     keep_nearer(bins, key, i, grid.squared_to_centre(points.row(i).transpose(), key.cell, key.level));
   }
-  return kept(bins);
+  std::vector<std::pair<int, int>> by_id;  // (id, level)
+  by_id.reserve(bins.size());
+  for (const auto& [key, best] : bins) by_id.emplace_back(best.id, key.level);
+  std::sort(by_id.begin(), by_id.end());
+  AdaptiveThinning out;
+  for (const auto& [id, l] : by_id) out.kept.push_back(id), out.levels.push_back(l);
+  return out;
 }
 
 }  // namespace cmm::geometry

@@ -32,8 +32,13 @@ struct AdaptiveThinningOptions {
 // irregular points — creases, corners — ask for B); a bin of level l is used when every point in it
 // allows l and every point in its 26 neighbours at that level allows l − 1 (so neighbouring regions
 // differ by about one level at most); else its eight children are tried. Never coarser than ε allows
-// at any point in the bin, never finer than B. `fits` are of `points`. Returns ascending indices.
-std::vector<int> thin_adaptive(const Points& points, const std::vector<LocalSurface>& fits,
+// at any point in the bin, never finer than B. `fits` are of `points`.
+struct AdaptiveThinning {
+  std::vector<int> kept;    // ascending indices into `points`
+  std::vector<int> levels;  // per kept point: the level l of its bin (B·2^l)
+};
+
+AdaptiveThinning thin_adaptive(const Points& points, const std::vector<LocalSurface>& fits,
                                const AdaptiveThinningOptions& options);
 
 }  // namespace cmm::geometry

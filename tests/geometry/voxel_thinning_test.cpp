@@ -101,9 +101,20 @@ TEST(VoxelThinning, AdaptiveKeepsFewerPointsOnFlatFacesAndAsManyWhereCurved) {
   AdaptiveThinningOptions options;
   options.bin_mm = bin.bin_mm;
   options.tolerance_mm = bin_options.tolerance_mm;
-  const std::vector<int> adaptive = thin_adaptive(p, fits, options);
+  const AdaptiveThinning thinned = thin_adaptive(p, fits, options);
+  const std::vector<int>& adaptive = thinned.kept;
   EXPECT_TRUE(std::is_sorted(adaptive.begin(), adaptive.end()));
-  EXPECT_EQ(thin_adaptive(p, fits, options), adaptive);
+  EXPECT_EQ(thin_adaptive(p, fits, options).kept, adaptive);
+  ASSERT_EQ(thinned.levels.size(), adaptive.size());
+  // Each kept point's level: 2 (4·B) far out on the flat face, 0 (B) on the cylinder.
+  for (std::size_t i = 0; i < adaptive.size(); ++i) {
+    const double x = p(adaptive[i], 0);
+    if (x < -4) {
+      EXPECT_EQ(thinned.levels[i], 2) << "at x " << x;
+    } else if (x > 1) {
+      EXPECT_EQ(thinned.levels[i], 0) << "at x " << x;
+    }
+  }
   auto count = [&](const std::vector<int>& ids, double x0, double x1) {
     return std::count_if(ids.begin(), ids.end(), [&](int i) { return p(i, 0) >= x0 && p(i, 0) < x1; });
   };

@@ -1,5 +1,7 @@
 // Runs the real cmm-plan binary on files and checks its exit codes, messages and plan JSON, every
 // plan validated against docs/plan.schema.json with Debian's python3-jsonschema.
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -48,7 +50,7 @@ class CmmPlan : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("cmm_plan_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("cmm_plan_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" + std::to_string(getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }

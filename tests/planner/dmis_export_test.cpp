@@ -1,5 +1,7 @@
 // DMIS export: golden files byte for byte (CMMD_REGENERATE_GOLDEN=1 rewrites them), the strict
 // checker on them and on one mutation per rule, the PTMEAS sign convention, and the refusals.
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -689,7 +691,7 @@ TEST(DmisExport, SensorLabelFromTheTipId) {
 }
 
 TEST(DmisExport, FileIsWrittenWholeAndErrorsNameIt) {
-  const fs::path dir = fs::temp_directory_path() / "cmmd_dmis_export_test";
+  const fs::path dir = fs::temp_directory_path() / ("cmmd_dmis_export_test_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   const MoveProgram p = hand_program();

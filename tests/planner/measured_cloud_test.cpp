@@ -1,5 +1,7 @@
 // The merged PLY: read back by geometry's own reader (counts, exact coordinates), its attributes
 // decoded by hand, the atomic write, and the refusal of points still in the machine frame.
+#include <unistd.h>
+
 #include "planner/measured_cloud.hpp"
 
 #include <gtest/gtest.h>
@@ -27,7 +29,7 @@ class MergedCloud : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("measured_cloud_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("measured_cloud_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" + std::to_string(getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }

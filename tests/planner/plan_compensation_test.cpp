@@ -2,6 +2,8 @@
 // non-identity T_M_S) with 1 µm trigger noise give edge points within 10 µm of the analytic edges and
 // bores within a few µm of the true diameters; bad touches fail their feature only; the CSV reads
 // back, the JSON holds what docs/result.md lists, the merged cloud holds scan and probe points.
+#include <unistd.h>
+
 #include "planner/plan_compensation.hpp"
 
 #include <gtest/gtest.h>
@@ -410,7 +412,7 @@ TEST(ResultExport, MergedCloudHoldsTheScanAndTheMeasuredPoints) {
   for (const HoleResult& h : result.holes) wall += h.wall_points.size();
   ASSERT_EQ(measured.size(), static_cast<std::size_t>(result.summary.edges_measured) + wall);
   ASSERT_GT(wall, 0u);
-  const auto dir = std::filesystem::temp_directory_path() / "cmmd_plan_compensation_test";
+  const auto dir = std::filesystem::temp_directory_path() / ("cmmd_plan_compensation_test_" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const auto file = dir / "merged.ply";

@@ -1,6 +1,8 @@
 // Base-plate registration: exact on exact corners, its predicted uncertainty matching 1,000 noisy
 // trials, every kind of bad input refused with a message naming the corner, and corners.json in and
 // the plan's "registration" out.
+#include <unistd.h>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -461,7 +463,7 @@ class CornersFile : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = std::filesystem::temp_directory_path() /
-           ("cmmd_registration_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("cmmd_registration_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" + std::to_string(getpid()));
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
     std::filesystem::copy_file(std::filesystem::path(CMMD_SOURCE_DIR) / "config" / "plate.json", dir_ / "plate.json");

@@ -1,5 +1,7 @@
 // Runs the real cmm-scan binary: what it writes must be what the library makes for the same options,
 // and bad flags must end in exit 2 with a message.
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -25,7 +27,7 @@ test::CommandResult run_scan(const std::string& flags) {
 // PLY keeps doubles exactly, so the files must equal the library's output to the bit.
 TEST(CmmScan, WritesMeshCloudAndTruthAndRefusesBadFlags) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "cmm_scan_test";
+  const fs::path dir = fs::temp_directory_path() / ("cmm_scan_test_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string mesh = (dir / "mesh.ply").string(), cloud = (dir / "cloud.ply").string(),

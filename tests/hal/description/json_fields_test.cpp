@@ -1,5 +1,7 @@
 // The field checker: typed reads with fallbacks, every problem with its JSON Pointer in one pass
 // (unknown keys included), nested inputs under their member, and files that are not JSON.
+#include <unistd.h>
+
 #include "hal/description/json_fields.hpp"
 
 #include <gmock/gmock.h>
@@ -123,7 +125,7 @@ TEST(JsonFields, AMemberThatIsNotAnObjectIsOneProblem) {
 }
 
 TEST(JsonFields, FilesThatAreNotJsonNameTheByte) {
-  const auto file = std::filesystem::temp_directory_path() / "cmmd_json_fields_test.json";
+  const auto file = std::filesystem::temp_directory_path() / ("cmmd_json_fields_test_" + std::to_string(getpid()) + ".json");
   std::ofstream(file) << "{\"a\": 1,\n \"b\": }";
   try {
     read_json_file(file, "the test input");

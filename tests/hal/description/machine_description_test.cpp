@@ -1,6 +1,8 @@
 // machine.json: the built-in default parses and round-trips; every bad description is refused with
 // the file and each bad field named by its JSON Pointer, all at once, so an operator fixes it in one
 // edit without reading code.
+#include <unistd.h>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -95,7 +97,7 @@ TEST(MachineDescription, TheQualificationIsStateNotDescription) {
 }
 
 TEST(MachineDescription, UnreadableFilesAreNamed) {
-  const std::filesystem::path file = std::filesystem::temp_directory_path() / "cmmd_machine_test.json";
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / ("cmmd_machine_test_" + std::to_string(getpid()) + ".json");
   std::ofstream(file) << "{\"travel_box\": ";
   try {
     read_machine(file);

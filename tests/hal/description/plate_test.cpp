@@ -1,6 +1,8 @@
 // The plate description: config/plate.json reads back as the 200 × 150 × 10 mm plate with its chamfer,
 // its geometry answers are exact, and every broken description is refused naming the field by its
 // JSON Pointer.
+#include <unistd.h>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -186,7 +188,7 @@ TEST(Plate, RefusesBrokenDescriptionsNamingTheField) {
 }
 
 TEST(Plate, ReadErrorsNameTheFile) {
-  const auto dir = std::filesystem::temp_directory_path() / "cmmd_plate_test";
+  const auto dir = std::filesystem::temp_directory_path() / ("cmmd_plate_test_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const auto broken = dir / "broken.json";
   std::ofstream(broken) << "{\"corners\": [";
