@@ -405,7 +405,12 @@ void join_chains(std::vector<Chain>& chains, const std::vector<LocalCrease>& loc
            b.outward.dot(-a.outward) >= std::cos(std::numbers::pi / 4) && same_crease(la, lb, cos_deg(30));
   };
   for (;;) {
-    // The closest pair of fitting ends: chain i's back onto chain j's front (j may be reversed).
+    // The closest pair of fitting ends: chain i's back onto chain j's front (j may be reversed). The
+    // ends are found through a grid, so a scan with thousands of short chains costs O(chains) a join.
+    Points ends(static_cast<Eigen::Index>(2 * chains.size()), 3);  // row 2j: j's front, 2j + 1: its back
+    for (std::size_t j = 0; j < chains.size(); ++j)
+      for (int back : {0, 1}) ends.row(static_cast<Eigen::Index>(2 * j + back)) = chain_end(chains[j], local, back != 0).position.transpose();
+    const PointGrid grid(ends, 2.5 * bin);
     int best_i = -1, best_j = -1;
     bool reverse_j = false;
     double best_gap = 1e300;
@@ -413,16 +418,16 @@ void join_chains(std::vector<Chain>& chains, const std::vector<LocalCrease>& loc
       if (chains[i].closed) continue;
       const ChainEnd back = chain_end(chains[i], local, true);
       const LocalCrease& lb = local[chains[i].samples.back()];
-      for (std::size_t j = 0; j < chains.size(); ++j) {
-        if (chains[j].closed || (j == i && chains[i].samples.size() < 6)) continue;
-        for (bool rev : {false, true}) {
-          if (j == i && rev) continue;
-          const ChainEnd front = chain_end(chains[j], local, rev);
-          double gap = 0;
-          if (fits(back, lb, front, local[rev ? chains[j].samples.back() : chains[j].samples.front()], gap) && gap < best_gap)
-            best_gap = gap, best_i = static_cast<int>(i), best_j = static_cast<int>(j), reverse_j = rev;
-        }
-      }
+      grid.for_each_within(back.position, 2.5 * bin, [&](int row, double) {
+        const std::size_t j = static_cast<std::size_t>(row / 2);
+        const bool rev = row % 2 == 1;
+        if (chains[j].closed || (j == i && (rev || chains[i].samples.size() < 6))) return;
+        const ChainEnd front = chain_end(chains[j], local, rev);
+        double gap = 0;
+        if (fits(back, lb, front, local[rev ? chains[j].samples.back() : chains[j].samples.front()], gap) &&
+            (gap < best_gap || (gap == best_gap && (static_cast<int>(i) < best_i || (static_cast<int>(i) == best_i && row < 2 * best_j + reverse_j)))))
+          best_gap = gap, best_i = static_cast<int>(i), best_j = static_cast<int>(j), reverse_j = rev;
+      });
     }
     if (best_i < 0) return;
     Chain& a = chains[static_cast<std::size_t>(best_i)];
