@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "hal/grbl_cmm.hpp"
+#include "hal/ippdme_cmm.hpp"
 #include "hal/modbus_cmm.hpp"
 #include "sim/simulated_cmm.hpp"
 
@@ -25,6 +26,7 @@ const std::vector<Driver>& drivers() {
       {"modbus", "modbus", [](const std::string&) { return std::make_unique<hal::ModbusCmm>(); }},
       {"grbl", "grbl", [](const std::string& dir) { return std::make_unique<hal::GrblCmm>(dir); }},
       {"serial", "grbl", [](const std::string& dir) { return std::make_unique<hal::GrblCmm>(dir); }},
+      {"ippdme", "ippdme", [](const std::string& dir) { return std::make_unique<hal::IppDmeCmm>(dir); }},
   };
   return list;
 }

@@ -17,6 +17,7 @@
 #include <asio.hpp>
 
 #include "hal/description/json_fields.hpp"
+#include "hal/probe_move_check.hpp"
 
 namespace cmm::hal {
 
@@ -456,16 +457,8 @@ void GrblCmm::do_move(const Move& m) {
 
 TouchResult GrblCmm::do_probe(const ProbeMove& p) {
   {
-    const double length = p.direction.norm();
-    if (!p.direction.allFinite() || !(length > 0.5 && length < 2))
-      throw std::invalid_argument("probe direction must be a unit vector");
-    if (!(p.max_travel_mm > 0) || !(p.min_travel_mm >= 0) || p.min_travel_mm >= p.max_travel_mm)
-      throw std::invalid_argument("probe travel must satisfy 0 ≤ min_travel_mm < max_travel_mm");
-    const Vec3 d = p.direction / length;
+    const Vec3 d = checked_probe_direction(p, settings_.machine.travel_box);
     const Vec3 end = p.start + d * p.max_travel_mm;
-    for (const auto& [point, name] : {std::pair{p.start, "probe start"}, std::pair{end, "probe end"},
-                                      std::pair{Vec3(p.start - d * std::max(0.0, p.retract_mm - p.min_travel_mm)), "probe retract"}})
-      if (!settings_.machine.travel_box.contains(point)) throw SoftLimit(std::string(name) + " " + text(point) + " is outside the travel box");
     if ((status().position - p.start).norm() > 1e-9) {
       auto prb = guarded(p.start, 0, false, "probe");
       if (prb && prb->success) throw EarlyTrigger("the probe triggered on the way to the search start " + text(p.start));

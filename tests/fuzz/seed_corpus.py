@@ -225,6 +225,21 @@ put("grbl", "replies.txt", "Grbl 1.1h ['$' for help]\r\nok\r\n<Idle|MPos:0.00000
     "[MSG:Reset to continue]\r\n$10=1\n")
 put("grbl", "alarm-states.txt", "<Alarm|MPos:0,0,0|FS:0,0|Pn:R>\n<Door:1|MPos:0,0,0>\nerror:20\nerror:33\nALARM:9\n")
 
+# --- I++ DME lines, both directions (docs/ippdme.md): what a client sends, what a server answers ---
+put("ippdme", "session.txt", "00001 StartSession()\r\n00002 GetDMEVersion()\r\n00003 EnumTools()\r\n"
+    "00004 ChangeTool(\"T1\")\r\n00005 SetCoordSystem(MachineCsy)\r\n"
+    "00006 OnPtMeasReport(X(), Y(), Z(), IJK(), ER(), Clock())\r\n"
+    "00007 SetProp(Tool.PtMeasPar.Speed(5), Tool.PtMeasPar.Approach(2.5), Tool.GoToPar.Speed(200))\r\n"
+    "00008 GetProp(Tool.PtMeasPar.Search())\r\nE0001 OnMoveReportE(Time(0.05), Dis(0.5), X(), Y(), Z())\r\n"
+    "00009 GoTo(X(300.000000000), Y(400), Z(-1.5e1))\r\n00010 PtMeas(X(1), Y(2), Z(3), IJK(0, 0, 1))\r\n"
+    "E0002 AbortE()\r\n00011 ClearAllErrors()\r\n00012 Get(X(), Y(), Z())\r\n00013 EndSession()\r\n")
+put("ippdme", "replies.txt", "00001 &\r\n00002 # DMEVersion(\"1.4.3\")\r\n00002 %\r\n00003 # \"T1\"\r\n"
+    "00010 # ER(1.000000000), IJK(0, 0, 1), Z(41.000123), X(278), Y(353)\r\nE0001 # X(1), Y(2), Z(3), Clock(6.25)\r\n"
+    "00007 ! Error(1, 0504, SetProp, \"clamped to 20\")\r\nE0000 ! Error(3, 0500, \"\", \"Emergency stop\")\r\n"
+    "00010 ! Error(2, 1003, PtMeas, \"No touch\")\r\n")
+put("ippdme", "broken.txt", "0001 Home()\r\n00001Home()\r\n00001 Home(\r\n00001 Get(X(X(X(X(\r\n00001 ChangeTool(\"T1)\r\n"
+    "00001 # X(1e999)\r\n00001 ! Error(2, 99999, GoTo, \"x\")\r\n00001 ! Error(2.5, 1, a, \"b\")\r\n\x01\x7f\r\n")
+
 
 def regs(*values):
     return b"".join(struct.pack(">H", v & 0xFFFF) for v in values)
