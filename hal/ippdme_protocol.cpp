@@ -2,6 +2,7 @@
 // (name(args), dotted names, numbers, "strings"), the reply markers, and the error table.
 #include "hal/ippdme_protocol.hpp"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -177,7 +178,7 @@ Term call_term(std::string name, std::vector<Term> args) {
 }
 
 std::string format_number(double value) {
-  char text[64];
+  char text[352];  // the largest finite double has 309 digits before the point
   const double pm = std::round(value * 1e9);
   std::snprintf(text, sizeof text, "%.9f", pm == 0 ? 0.0 : value);  // never "-0.000000000"
   return text;
@@ -300,8 +301,11 @@ std::string format_reply(const Reply& reply) {
   if (reply.kind == ReplyKind::error) {
     char head[32];
     std::snprintf(head, sizeof head, "Error(%d, %04d, ", reply.error.severity, reply.error.code);
-    out += std::string(" ") + head + (reply.error.method.empty() ? "\"\"" : reply.error.method) + ", \"" +
-           reply.error.text + "\")";
+    // The method goes unquoted when it is a name (GoTo), quoted otherwise ("" when none).
+    const std::string& m = reply.error.method;
+    bool name = !m.empty() && std::isalpha(static_cast<unsigned char>(m[0]));
+    for (char c : m) name = name && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.');
+    out += std::string(" ") + head + (name ? m : "\"" + m + "\"") + ", \"" + reply.error.text + "\")";
   }
   return out;
 }

@@ -172,6 +172,9 @@ put("daemon_config", "modbus.json", json.dumps(dict(cmmd, machine={"driver": "mo
 put("daemon_config", "grbl-tokens.json", json.dumps(dict(cmmd, machine={"driver": "serial", "device": "/tmp/ttyACM0", "baud": 115200},
     server=dict(cmmd["server"], tcp_bind="0.0.0.0", tokens=[{"token": "0123456789abcdef", "role": "operator"}]),
     machine_description=machine, plate=plate)))
+put("daemon_config", "ippdme.json", json.dumps(dict(cmmd, machine={"driver": "ippdme", "host": "10.0.0.7", "port": 1294,
+    "tool": "Probe_A", "tools": {"T1": "Probe_A"}, "timeouts": {"connect_s": 2, "response_s": 2, "motion_s": 600},
+    "move_report_s": 0.05, "protocol_log": "ippdme.log", "machine": machine})))
 
 # --- job requests and JSON-RPC lines after docs/api.md --------------------------------------------
 given = {"corners": corners["corners"], "plate": plate}

@@ -82,6 +82,14 @@ TEST(IppDmeProtocol, ReadsEveryKindOfReply) {
   EXPECT_EQ(error->error.text, "Emergency stop");
   EXPECT_EQ(parse_reply("00001 ! Error(2, 1003, \"\", \"No touch\")")->error.code, 1003);
   EXPECT_EQ(format_reply(*error), "E0000 ! Error(3, 0500, GoTo, \"Emergency stop\")");
+  // Found by the fuzzer: a quoted method that is no name is printed quoted, so that it reads back.
+  auto quoted = parse_reply("E0000 ! Error(3, 0500, \"0001 OnM\", \"Emergency stop\")");
+  ASSERT_TRUE(quoted);
+  EXPECT_EQ(format_reply(*quoted), "E0000 ! Error(3, 0500, \"0001 OnM\", \"Emergency stop\")");
+  // Found by the fuzzer: a number of 229 digits was cut to the printing buffer's 63.
+  auto big = parse_reply("00001 # X(1e228)");
+  ASSERT_TRUE(big);
+  EXPECT_EQ(number_of(parse_reply(format_reply(*big))->data, "X"), 1e228);
 }
 
 TEST(IppDmeProtocol, RefusesMalformedReplies) {
