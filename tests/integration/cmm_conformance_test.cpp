@@ -14,6 +14,7 @@
 #include "child_process.hpp"
 #include "hal/cmm.hpp"
 #include "hal/grbl_cmm.hpp"
+#include "hal/ippdme_cmm.hpp"
 #include "hal/modbus_cmm.hpp"
 #include "hal/qualification.hpp"
 #include "sim/simulated_cmm.hpp"
@@ -107,6 +108,31 @@ struct GrblPath {
   std::unique_ptr<hal::GrblCmm> cmm;
 };
 
+// I++ DME: the client driver against cmm-sim's I++ server on loopback, as against a commercial
+// controller. The server reports no travel box or tips, so the driver's config carries the machine's.
+struct IppDmePath {
+  static std::string name() { return "IppDme"; }
+  hal::Cmm& open(const nlohmann::json& config) {
+    cmm.reset();
+    sim.reset();
+    const auto file = std::filesystem::path(::testing::TempDir()) / ("cmm-sim-ippdme-" + std::to_string(getpid()) + ".json");
+    std::ofstream(file) << config.dump();
+    sim = std::make_unique<testing::ChildProcess>(std::vector<std::string>{
+        CMMD_BINARY_DIR "/sim/cmm-sim", "--config", file.string(), "--port", "0", "--ippdme", "0"});
+    const auto ready = nlohmann::json::parse(sim->read_line(60));
+    const auto machine = sim::sim_config_from_json(config, CMMD_SOURCE_DIR).machine;
+    cmm = std::make_unique<hal::IppDmeCmm>();
+    cmm->configure({{"driver", "ippdme"}, {"port", ready.at("ippdme")},
+                    {"timeouts", {{"response_s", config.value("timeout_s", 5.0)}}}, {"move_report_s", 0.002},
+                    {"machine", description::to_json(machine)}});
+    cmm->connect();
+    cmm->enable();
+    return *cmm;
+  }
+  std::unique_ptr<testing::ChildProcess> sim;
+  std::unique_ptr<hal::IppDmeCmm> cmm;
+};
+
 // Touches per path from SameSeedSameTouchesOnEveryPath, compared across paths at the end.
 std::map<std::string, std::vector<Vec3>>& touches_by_path() {
   static std::map<std::string, std::vector<Vec3>> touches;
@@ -152,7 +178,7 @@ class CmmConformance : public ::testing::Test {
   std::unique_ptr<sim::SimulatedMachine> truth_;
 };
 
-using Paths = ::testing::Types<InProcessPath, ModbusPath, GrblPath>;
+using Paths = ::testing::Types<InProcessPath, ModbusPath, GrblPath, IppDmePath>;
 class PathNames {
  public:
   template <class T>
