@@ -131,6 +131,14 @@ Vec3 IppDmeCmm::correction() const {
   return settings_.machine.tips.at(active_).offset - server_offsets_.at(active_);
 }
 
+Vec3 IppDmeCmm::theirs_inside(const Vec3& ball) const {
+  // The controller checks its travel box against its own tool data. After a qualification our ball
+  // centre differs from its by the correction (µm), so a target on a face of our box (the program's
+  // park corner) may lie that far outside its: put it back on the face. Our box check has passed.
+  const description::TravelBox& box = settings_.machine.travel_box;
+  return theirs(ball).cwiseMax(box.min).cwiseMin(box.max);
+}
+
 double IppDmeCmm::host_clock() const { return std::chrono::duration<double>(Clock::now() - kStartTime).count(); }
 
 // ---- the link -------------------------------------------------------------------------------
@@ -593,7 +601,7 @@ void IppDmeCmm::do_move(const Move& m) {
   const double max_speed = settings_.machine.max_speed_mm_s;
   set_prop("Tool.GoToPar.Speed", std::min(m.speed_mm_s > 0 ? m.speed_mm_s : max_speed, max_speed), goto_speed_, "move");
   try {
-    transact(Kind::motion, "GoTo", xyz(theirs(m.target)), "move");
+    transact(Kind::motion, "GoTo", xyz(theirs_inside(m.target)), "move");
   } catch (const EarlyTrigger& e) {
     throw EarlyTrigger(std::string("the probe touched during a guarded move to ") + text(m.target) + ": " + e.what());
   }
@@ -608,7 +616,7 @@ TouchResult IppDmeCmm::do_probe(const ProbeMove& p) {
     const double max_speed = settings_.machine.max_speed_mm_s;
     set_prop("Tool.GoToPar.Speed", max_speed, goto_speed_, "probe");
     try {
-      transact(Kind::motion, "GoTo", xyz(theirs(p.start)), "probe");
+      transact(Kind::motion, "GoTo", xyz(theirs_inside(p.start)), "probe");
     } catch (const EarlyTrigger& e) {
       throw EarlyTrigger("the probe touched on the way to the search start " + text(p.start) + ": " + e.what());
     }

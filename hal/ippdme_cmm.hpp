@@ -107,6 +107,7 @@ class IppDmeCmm : public CmmDriver {
   Vec3 correction() const;
   Vec3 ours(const Vec3& server) const { return server + correction(); }
   Vec3 theirs(const Vec3& ball) const { return ball - correction(); }
+  Vec3 theirs_inside(const Vec3& ball) const;  // a GoTo target, kept inside the travel box
   double host_clock() const;
 
   std::string base_dir_;

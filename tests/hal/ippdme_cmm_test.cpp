@@ -150,6 +150,26 @@ TEST(IppDmeCmm, ThePtMeasLineMapsTheSearchOntoIJKAndTheReportBackOntoTheBallCent
   EXPECT_EQ(c.server.count("SetProp"), props);
 }
 
+// A qualification moves our ball centre off the controller's by µm, both ways: touches are reported
+// in ours, targets sent in its, and a target on a face of the travel box (the program's park corner)
+// stays on the face rather than falling outside the controller's box by those µm.
+TEST(IppDmeCmm, AQualifiedOffsetCorrectsTouchesAndTargetsAndKeepsThemInTheBox) {
+  Connected c;
+  description::TipQualification q;
+  q.ball_radius_mm = 0.9985;
+  q.offset = Vec3(0.002, 0.001, -0.001);
+  q.time_utc = "2026-12-03T12:00:00Z";
+  c.cmm.record_qualification("T1", q);
+  c.cmm.move({Vec3(-100, -100, 60), 0});
+  EXPECT_THAT(c.server.received().back(), HasSubstr("GoTo(X(-100.000000000), Y(-100.000000000), Z(60.001000000))"));
+  EXPECT_LT((c.cmm.status().position - Vec3(-99.998, -99.999, 60)).norm(), 1e-9);  // as far as our box allows
+  c.cmm.move({Vec3(200, 300, 100), 0});
+  EXPECT_THAT(c.server.received().back(), HasSubstr("GoTo(X(199.998000000), Y(299.999000000), Z(100.001000000))"));
+  EXPECT_LT((c.cmm.status().position - Vec3(200, 300, 100)).norm(), 1e-9);
+  TouchResult r = c.cmm.probe(down_at(Vec3(200, 300, 50)));
+  EXPECT_LT((r.centre - Vec3(200, 300, 45)).norm(), 1e-9);  // the server's touch, corrected into ours
+}
+
 TEST(IppDmeCmm, ReportFieldsAreReadByNameInAnyOrder) {
   Connected c;
   c.server.script([](const ipp::Command& c) -> Commands {

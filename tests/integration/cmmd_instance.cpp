@@ -139,14 +139,31 @@ nlohmann::json sample_measure_plate(const std::filesystem::path& folder) {
   return {{"measure_plate", read_json_file(folder / "plate_corners.json")}};
 }
 
-SimulatorProcess::SimulatorProcess(const std::filesystem::path& config, double time_scale, int port)
-    : process({CMMD_BINARY_DIR "/sim/cmm-sim", "--config", config.string(), "--port", std::to_string(port),
-               "--time-scale", std::to_string(time_scale)}) {
-  this->port = nlohmann::json::parse(process.read_line(60)).at("modbus_tcp").get<int>();
+namespace {
+std::vector<std::string> sim_command(const std::filesystem::path& config, double time_scale, int port,
+                                     const std::vector<std::string>& extra) {
+  std::vector<std::string> command = {CMMD_BINARY_DIR "/sim/cmm-sim", "--config", config.string(), "--port",
+                                      std::to_string(port), "--time-scale", std::to_string(time_scale)};
+  command.insert(command.end(), extra.begin(), extra.end());
+  return command;
+}
+}  // namespace
+
+SimulatorProcess::SimulatorProcess(const std::filesystem::path& config, double time_scale, int port,
+                                   const std::vector<std::string>& extra)
+    : process(sim_command(config, time_scale, port, extra)) {
+  const nlohmann::json ready = nlohmann::json::parse(process.read_line(60));
+  this->port = ready.at("modbus_tcp").get<int>();
+  ippdme_port = ready.value("ippdme", 0);
 }
 
 nlohmann::json modbus_block(int port) {
   return {{"driver", "modbus"}, {"host", "127.0.0.1"}, {"port", port}, {"connect_attempts", 3}};
+}
+
+nlohmann::json ippdme_block(int port) {
+  return {{"driver", "ippdme"}, {"host", "127.0.0.1"}, {"port", port}, {"connect_attempts", 3},
+          {"machine", CMMD_SOURCE_DIR "/config/machine.json"}};
 }
 
 nlohmann::json wait_for_notification(daemon::RpcClient& client, const std::string& what,

@@ -65,13 +65,18 @@ nlohmann::json sample_measure_plate(const std::filesystem::path& folder);
 std::filesystem::path sample_scan(const std::filesystem::path& folder);
 
 // cmm-sim on loopback serving `config` over Modbus TCP; `port` 0 lets it pick one (see port).
+// `extra` goes on its command line: {"--ippdme", "0"} serves I++ DME too (see ippdme_port).
 struct SimulatorProcess {
-  SimulatorProcess(const std::filesystem::path& config, double time_scale, int port = 0);
+  SimulatorProcess(const std::filesystem::path& config, double time_scale, int port = 0,
+                   const std::vector<std::string>& extra = {});
   ChildProcess process;
   int port = 0;
+  int ippdme_port = 0;
 };
 // cmmd.json's machine block for a cmm-sim on 127.0.0.1:port.
 nlohmann::json modbus_block(int port);
+// cmmd.json's machine block for cmm-sim's I++ DME server on 127.0.0.1:port (the default machine).
+nlohmann::json ippdme_block(int port);
 
 // The next notification (as {"method", "params"}) that `match` accepts, the others dropped; throws
 // std::runtime_error naming `what` after timeout_s.

@@ -1,5 +1,5 @@
-// cmmd end to end: the real daemon driving cmm-sim over Modbus TCP, jobs submitted over its Unix
-// socket; the measured edges and bores are held against the simulator's true part.
+// cmmd end to end: the real daemon driving cmm-sim over Modbus TCP and over I++ DME, jobs submitted
+// over its Unix socket; the measured edges and bores are held against the simulator's true part.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -32,12 +32,11 @@ std::filesystem::path scratch(const std::string& name) {
 
 geometry::Vec3 vec(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
 
-TEST(CmmdJob, MeasuresThePlateAndEveryEdgeOverModbusWithinTenMicrometresOfTheTruth) {
-  const auto dir = scratch("full");
+// The whole job on the sample part: qualify, register on the plate, measure every planned edge
+// point and bore, and hold each against the true part.
+void measure_the_sample_part(const std::filesystem::path& dir, const json& machine_block) {
   const auto scan = testing::sample_scan(dir / "scan");
-  SimulatorProcess sim(dir / "scan" / "sim.json", 100);
-  CmmdInstance cmmd(dir / "cmmd", modbus_block(sim.port),
-                    {{"machine_description", CMMD_SOURCE_DIR "/config/machine.json"}});
+  CmmdInstance cmmd(dir / "cmmd", machine_block, {{"machine_description", CMMD_SOURCE_DIR "/config/machine.json"}});
   cmmd.start();
   daemon::RpcClient client = cmmd.client();
   const json q = client.call("machine.qualify", json::object(), 300);
@@ -101,6 +100,22 @@ TEST(CmmdJob, MeasuresThePlateAndEveryEdgeOverModbusWithinTenMicrometresOfTheTru
   EXPECT_EQ(static_cast<int>(std::count(csv.begin(), csv.end(), '\n')), total + 1);
   EXPECT_TRUE(std::filesystem::exists(cmmd.job_folder(id) / "merged.ply"));
   EXPECT_EQ(cmmd.terminate(), 0);
+}
+
+TEST(CmmdJob, MeasuresThePlateAndEveryEdgeOverModbusWithinTenMicrometresOfTheTruth) {
+  const auto dir = scratch("full");
+  testing::sample_scan(dir / "scan");
+  SimulatorProcess sim(dir / "scan" / "sim.json", 100);
+  measure_the_sample_part(dir, modbus_block(sim.port));
+}
+
+// The same job through a commercial controller's interface: cmmd's I++ DME client against
+// cmm-sim's I++ server, to the same truth.
+TEST(CmmdJob, MeasuresThePlateAndEveryEdgeOverIppDmeWithinTenMicrometresOfTheTruth) {
+  const auto dir = scratch("ippdme");
+  testing::sample_scan(dir / "scan");
+  SimulatorProcess sim(dir / "scan" / "sim.json", 100, 0, {"--ippdme", "0"});
+  measure_the_sample_part(dir, testing::ippdme_block(sim.ippdme_port));
 }
 
 TEST(CmmdJob, PreviewDryRunsTheProgramOnTheReferenceMesh) {
