@@ -1,12 +1,17 @@
 // HAL round trips per second on each path against its bare transport, in one run: the driver's own
 // overhead (encoding, the sequence echo, lifecycle checks) should be small beside the transport's.
-// The servers are cmm-sim's own, run in this process: Modbus on loopback TCP, Grbl on a pty.
+// The servers are cmm-sim's own, run in this process: Modbus and I++ DME on loopback TCP, Grbl on a
+// pty.
 #include <benchmark/benchmark.h>
 
 #include <modbus/modbus.h>
 
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <pty.h>
+#include <sys/socket.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -16,9 +21,11 @@
 #include <thread>
 
 #include "hal/grbl_cmm.hpp"
+#include "hal/ippdme_cmm.hpp"
 #include "hal/modbus_cmm.hpp"
 #include "hal/modbus_map.hpp"
 #include "sim/grbl_server.hpp"
+#include "sim/ippdme_server.hpp"
 #include "sim/modbus_server.hpp"
 #include "sim/simulated_cmm.hpp"
 
@@ -134,11 +141,8 @@ struct GrblRig {
   std::thread loop{[this] { server.serve(); }};
   hal::GrblCmm cmm;
   GrblRig() {
-    const auto& box = config.machine.travel_box;
     cmm.configure({{"driver", "grbl"}, {"device", server.slave_path()}, {"reset_on_open", false},
-                   {"poll_interval_s", 0.0001},
-                   {"travel_box", {{"min", {box.min.x(), box.min.y(), box.min.z()}}, {"max", {box.max.x(), box.max.y(), box.max.z()}}}},
-                   {"tips", {{{"id", "T1"}, {"ball_radius_mm", 1.0}}}}, {"active_tip", "T1"}});
+                   {"poll_interval_s", 0.0001}, {"machine", description::to_json(config.machine)}});
     cmm.connect();
     cmm.enable();
   }
@@ -197,6 +201,77 @@ void bm_grbl_move(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 
+// cmm-sim's I++ DME side on loopback TCP in this process, one session at a time.
+struct IppDmeRig {
+  sim::SimConfig config = sim::sim_config_from_json({{"part", {{"analytic", "cube"}, {"edge_length_mm", 4}}}});
+  sim::SimulatedMachine machine{config};
+  sim::IppDmeServer server{machine, config.faults, sim::IppDmeEndpoint{}};
+  std::thread loop{[this] { server.serve(); }};
+  ~IppDmeRig() {
+    server.shutdown();
+    loop.join();
+  }
+};
+
+// The line the driver's status() sends: the axes and cmm-sim's Clock() (the driver asks for it once
+// it knows the server has it), so that both sides carry the same bytes.
+constexpr const char* kGetLine = "Get(X(), Y(), Z(), Clock())";
+
+// A bare I++ client: a blocking socket, a session, then `Get(...)` and its `&`, `#`, `%` lines read
+// back, no parsing: the least an I++ position round trip can cost on this server.
+void bm_ippdme_bare_get(benchmark::State& state) {
+  IppDmeRig rig;
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  int one = 1;
+  ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(rig.server.port()));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) return state.SkipWithError("connect");
+  std::string pending;
+  char buffer[4096];
+  // Sends one command and reads up to its `%` (or an error).
+  auto transact = [&](int tag, const std::string& command) {
+    char head[8];
+    std::snprintf(head, sizeof head, "%05d ", tag % 100000);
+    const std::string line = head + command + "\r\n";
+    if (::send(fd, line.data(), line.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(line.size())) return false;
+    const std::string done = std::string(head) + "%", failed = std::string(head) + "!";
+    for (;;) {
+      const auto end = pending.find('\n');
+      if (end != std::string::npos) {
+        const std::string got = pending.substr(0, end);
+        pending.erase(0, end + 1);
+        if (got.rfind(done, 0) == 0) return true;
+        if (got.rfind(failed, 0) == 0) return false;
+        continue;
+      }
+      const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
+      if (n <= 0) return false;
+      pending.append(buffer, static_cast<std::size_t>(n));
+    }
+  };
+  if (!transact(1, "StartSession()")) return state.SkipWithError("StartSession");
+  int tag = 1;
+  for (auto _ : state)
+    if (!transact(++tag % 99999 + 1, kGetLine)) return state.SkipWithError("Get");
+  state.SetItemsProcessed(state.iterations());
+  transact(++tag % 99999 + 1, "EndSession()");
+  ::close(fd);
+}
+
+// hal::IppDmeCmm::status() when idle: the same Get through the driver (tag, transaction, parse by name).
+void bm_ippdme_status(benchmark::State& state) {
+  IppDmeRig rig;
+  hal::IppDmeCmm cmm;
+  cmm.configure({{"driver", "ippdme"}, {"port", rig.server.port()}, {"machine", description::to_json(rig.config.machine)}});
+  cmm.connect();
+  for (auto _ : state) benchmark::DoNotOptimize(cmm.status());
+  state.SetItemsProcessed(state.iterations());
+  cmm.disconnect();
+}
+
 // The in-process simulator, for scale: no transport at all.
 void bm_in_process_status(benchmark::State& state) {
   sim::SimulatedCmm cmm;
@@ -214,6 +289,8 @@ BENCHMARK(bm_pty_bare_echo)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_grbl_bare_status)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_grbl_status)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_grbl_move)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_ippdme_bare_get)->UseRealTime()->MinTime(1.0);
+BENCHMARK(bm_ippdme_status)->UseRealTime()->MinTime(1.0);
 BENCHMARK(bm_in_process_status)->UseRealTime()->MinTime(0.5);
 
 }  // namespace

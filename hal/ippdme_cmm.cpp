@@ -364,8 +364,12 @@ void IppDmeCmm::on_line(const std::string& line) {
   auto it = open_.find(ippdme::format_tag(reply->tag));
   if (it == open_.end()) return;  // a late answer to a transaction given up on; the link was dropped then
   Transaction& tx = *it->second;
+  bool wake = true;
   switch (reply->kind) {
-    case ippdme::ReplyKind::ack: tx.acked = true; break;
+    case ippdme::ReplyKind::ack:
+      tx.acked = true;
+      wake = tx.wake_on_ack;
+      break;
     case ippdme::ReplyKind::data: tx.data.push_back(reply->data); break;
     case ippdme::ReplyKind::done: tx.done = true; break;
     case ippdme::ReplyKind::error:
@@ -382,8 +386,9 @@ void IppDmeCmm::on_line(const std::string& line) {
       }
       break;
   }
+  if (reply->kind == ippdme::ReplyKind::data || (reply->kind == ippdme::ReplyKind::error && !tx.done)) wake = false;
   if (tx.done) open_.erase(it);
-  wake_.notify_all();
+  if (wake) wake_.notify_all();
 }
 
 ippdme::Tag IppDmeCmm::next_tag(bool event) {
@@ -404,17 +409,21 @@ std::shared_ptr<IppDmeCmm::Transaction> IppDmeCmm::send(Kind kind, const std::st
     std::lock_guard lock(mutex_);
     if (link_down_ || !link_) throw CommLost(std::string(what) + ": the I++ link is down");
     tx->tag = next_tag(kind == Kind::fast);
+    tx->wake_on_ack = kind != Kind::query;
     tx->line = ippdme::format_command({tx->tag, method, args});
     open_[ippdme::format_tag(tx->tag)] = tx;
   }
   write_line(tx->line, what);
-  // The next command goes out once this one is acknowledged (or refused before it was).
+  // The next command goes out once this one is acknowledged (or refused before it was). A query
+  // holds the line to its end, which is quick, so that its sender wakes once, not twice.
+  const bool query = kind == Kind::query;
   std::unique_lock lock(mutex_);
-  if (!wake_.wait_for(lock, seconds(settings_.response_timeout_s),
-                      [&] { return tx->acked || tx->done || link_down_ || !garbled_.empty(); })) {
+  if (!wake_.wait_for(lock, seconds(settings_.response_timeout_s), [&] {
+        return (query ? tx->done : tx->acked || tx->done) || link_down_ || !garbled_.empty();
+      })) {
     lock.unlock();
     link_out_of_step();  // its answer may still come, and would answer the next command
-    throw Timeout(std::string(what) + ": no acknowledgement of \"" + tx->line + "\" within " +
+    throw Timeout(std::string(what) + (query ? ": no answer to \"" : ": no acknowledgement of \"") + tx->line + "\" within " +
                   std::to_string(settings_.response_timeout_s) + " s; the link is down until connect()");
   }
   return tx;

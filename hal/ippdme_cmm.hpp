@@ -72,6 +72,7 @@ class IppDmeCmm : public CmmDriver {
     ippdme::Tag tag;
     std::string line;
     bool acked = false, done = false;
+    bool wake_on_ack = true;  // a query's sender waits for its end only: one wake-up, not two
     std::vector<std::vector<ippdme::Term>> data;
     std::vector<ippdme::ServerError> warnings;
     std::optional<ippdme::ServerError> error;
