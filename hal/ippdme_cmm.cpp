@@ -1,6 +1,6 @@
-// The I++ DME client: an Asio TCP socket read by its own thread (replies matched to their
-// transactions by tag, move reports and the server's own events to the status), commands written
-// from the calling thread one acknowledgement at a time.
+// The I++ DME client: an Asio TCP socket read by the threads that wait on it (replies matched to
+// their transactions by tag, move reports and the server's own events to the status), commands
+// written from the calling thread one acknowledgement at a time.
 #include "hal/ippdme_cmm.hpp"
 
 #include <poll.h>
@@ -82,8 +82,7 @@ IppDmeSettings ippdme_settings_from_json(const nlohmann::json& j, const std::str
 struct IppDmeCmm::Link {
   asio::io_context io;
   asio::ip::tcp::socket socket{io};
-  asio::streambuf buffer{ippdme::kMaxLineChars + 2};  // a server that never ends a line cannot grow it
-  std::thread thread;
+  std::string partial;  // the line being received (under io_mutex_)
 };
 
 IppDmeCmm::IppDmeCmm(std::string base_dir) : CmmDriver("the I++ DME machine"), base_dir_(std::move(base_dir)) {}
@@ -144,14 +143,11 @@ double IppDmeCmm::host_clock() const { return std::chrono::duration<double>(Cloc
 // ---- the link -------------------------------------------------------------------------------
 
 void IppDmeCmm::close_link() {
-  std::lock_guard lock(write_mutex_);  // no write is under way on the socket being closed
+  // Nobody reads or writes the socket being closed.
+  std::scoped_lock lock(io_mutex_, write_mutex_);
   if (!link_) return;
-  asio::post(link_->io, [l = link_.get()] {
-    asio::error_code ignored;
-    l->socket.close(ignored);
-  });
-  link_->io.stop();
-  if (link_->thread.joinable()) link_->thread.join();
+  asio::error_code ignored;
+  link_->socket.close(ignored);
   link_.reset();
 }
 
@@ -191,25 +187,7 @@ void IppDmeCmm::on_connect() {
   link->socket.set_option(asio::ip::tcp::no_delay(true));  // one short line per round trip
   link->io.restart();
   if (log_) log_->note("connected to " + where());
-  Link* l = link.get();
-  struct Reader {
-    IppDmeCmm* self;
-    Link* l;
-    void operator()() const {
-      asio::async_read_until(l->socket, l->buffer, '\n', [self = self, l = l](const asio::error_code& e, std::size_t n) {
-        if (e) return self->on_link_down();
-        std::string line(asio::buffers_begin(l->buffer.data()), asio::buffers_begin(l->buffer.data()) + static_cast<std::ptrdiff_t>(n));
-        l->buffer.consume(n);
-        line.pop_back();  // '\n'
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        self->on_line(line);
-        Reader{self, l}();
-      });
-    }
-  };
   link_ = std::move(link);
-  Reader{this, l}();
-  l->thread = std::thread([l] { l->io.run(); });
   start_session();
 }
 
@@ -325,6 +303,57 @@ void IppDmeCmm::write_line(const std::string& line, const char* what) {
   }
 }
 
+void IppDmeCmm::pump(std::chrono::milliseconds max_wait) {
+  // Called with io_mutex_ held. Whoever waits reads: the thread that waits for an answer takes the
+  // lines off the socket itself and hands out what is for others, so an answer costs no hop
+  // through a reader thread (a third of a round trip on two cores; docs/PERFORMANCE.md).
+  if (!link_) return;
+  const int fd = link_->socket.native_handle();
+  char buffer[4096];
+  // What is there already is taken without a poll (a syscall less per line on a busy link).
+  ssize_t n = ::recv(fd, buffer, sizeof buffer, MSG_DONTWAIT);
+  if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+    pollfd readable{fd, POLLIN, 0};
+    if (max_wait.count() == 0 || ::poll(&readable, 1, static_cast<int>(max_wait.count())) <= 0) return;
+    n = ::recv(fd, buffer, sizeof buffer, MSG_DONTWAIT);
+  }
+  if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) return;
+  if (n <= 0) return on_link_down();
+  std::string& partial = link_->partial;
+  for (ssize_t i = 0; i < n; ++i) {
+    if (buffer[i] != '\n') {
+      partial.push_back(buffer[i]);
+      if (partial.size() > ippdme::kMaxLineChars + 1) {  // a server that never ends a line
+        on_line(partial.substr(0, 200) + "...");
+        partial.clear();
+      }
+      continue;
+    }
+    if (!partial.empty() && partial.back() == '\r') partial.pop_back();
+    on_line(partial);
+    partial.clear();
+  }
+}
+
+bool IppDmeCmm::await(const std::function<bool()>& ready, double timeout_s) {
+  const auto deadline = Clock::now() + seconds(timeout_s);
+  for (;;) {
+    {
+      std::lock_guard lock(mutex_);
+      if (ready() || link_down_ || !garbled_.empty()) return true;
+    }
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    if (left.count() <= 0) return false;
+    if (std::unique_lock io(io_mutex_, std::try_to_lock); io) {
+      pump(std::min(left, std::chrono::milliseconds(20)) + std::chrono::milliseconds(1));
+      continue;
+    }
+    // Another thread reads: it wakes us when our line comes, or we take over when it is done.
+    std::unique_lock lock(mutex_);
+    wake_.wait_for(lock, std::chrono::milliseconds(1), [&] { return ready() || link_down_ || !garbled_.empty(); });
+  }
+}
+
 void IppDmeCmm::on_link_down() {
   if (log_) log_->note("the connection closed");
   std::lock_guard lock(mutex_);
@@ -417,11 +446,7 @@ std::shared_ptr<IppDmeCmm::Transaction> IppDmeCmm::send(Kind kind, const std::st
   // The next command goes out once this one is acknowledged (or refused before it was). A query
   // holds the line to its end, which is quick, so that its sender wakes once, not twice.
   const bool query = kind == Kind::query;
-  std::unique_lock lock(mutex_);
-  if (!wake_.wait_for(lock, seconds(settings_.response_timeout_s), [&] {
-        return (query ? tx->done : tx->acked || tx->done) || link_down_ || !garbled_.empty();
-      })) {
-    lock.unlock();
+  if (!await([&] { return query ? tx->done : tx->acked || tx->done; }, settings_.response_timeout_s)) {
     link_out_of_step();  // its answer may still come, and would answer the next command
     throw Timeout(std::string(what) + (query ? ": no answer to \"" : ": no acknowledgement of \"") + tx->line + "\" within " +
                   std::to_string(settings_.response_timeout_s) + " s; the link is down until connect()");
@@ -431,8 +456,8 @@ std::shared_ptr<IppDmeCmm::Transaction> IppDmeCmm::send(Kind kind, const std::st
 
 IppDmeCmm::Outcome IppDmeCmm::wait(const std::shared_ptr<Transaction>& tx, double timeout_s, const char* what,
                                    const std::string& method) {
+  const bool ended = await([&] { return tx->done; }, timeout_s);
   std::unique_lock lock(mutex_);
-  const bool ended = wake_.wait_for(lock, seconds(timeout_s), [&] { return tx->done || link_down_ || !garbled_.empty(); });
   if (!garbled_.empty()) {
     const std::string line = garbled_;
     lock.unlock();
@@ -462,7 +487,12 @@ void IppDmeCmm::fail(const ippdme::ServerError& e, const char* what, const std::
   char code[8];
   std::snprintf(code, sizeof code, "%04d", e.code);
   const std::string message = std::string(what) + ": the machine answered error " + code + " (" + e.text + ") to " + method;
-  if (e.code == ippdme::kErrorEStop)
+  bool estop = false;
+  {
+    std::lock_guard lock(mutex_);
+    estop = estop_;  // an e-stop event came before this error (its 0514, say): never cleared here
+  }
+  if (e.code == ippdme::kErrorEStop || estop)
     throw EStop(std::string(what) + ": the machine's emergency stop (I++ error 0500: " + e.text + "); reset() after releasing it");
   if (e.code == ippdme::kErrorTransactionAborted) {
     // Our own AbortE (stop or abort); the stopping thread clears the server's error state.
@@ -524,6 +554,11 @@ Vec3 IppDmeCmm::query_position(std::optional<double>* clock) {
   throw Protocol("status: the answer to Get(X(), Y(), Z()) lacks an axis");
 }
 
+void IppDmeCmm::drain() {
+  // What came while nobody waited (an e-stop event pressed at an idle machine) is read first.
+  if (std::unique_lock io(io_mutex_, std::try_to_lock); io) pump(std::chrono::milliseconds(0));
+}
+
 MachineStatus IppDmeCmm::read_status() {
   MachineStatus s;
   std::unique_lock q(query_mutex_);
@@ -537,10 +572,14 @@ MachineStatus IppDmeCmm::read_status() {
   std::optional<double> clock;
   Vec3 at = Vec3::Zero();
   if (!cached) {
-    at = query_position(&clock);
-    std::lock_guard lock(mutex_);
-    reported_ = at;
-    if (clock) reported_clock_ = clock;
+    try {
+      // An e-stop event read on the way (pressed at an idle machine) comes before the Get's refusal.
+      at = query_position(&clock);
+      std::lock_guard lock(mutex_);
+      reported_ = at;
+      if (clock) reported_clock_ = clock;
+    } catch (const EStop&) {
+    }
   }
   q.unlock();
   std::lock_guard lock(mutex_);
@@ -571,6 +610,7 @@ description::MachineDescription IppDmeCmm::read_info() {
 
 void IppDmeCmm::begin_motion() {
   stop_requested_ = false;  // a stop of an earlier call; one during this call ends it at its next command
+  drain();
   std::lock_guard lock(mutex_);
   if (estop_) throw EStop("the machine's emergency stop is active (" + estop_text_ + "); reset() after releasing it");
 }

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
+#include <functional>
 #include <condition_variable>
 #include <map>
 #include <memory>
@@ -67,7 +69,7 @@ class IppDmeCmm : public CmmDriver {
   void do_record_qualification(const std::string& tip_id, const description::TipQualification& q) override;
 
  private:
-  struct Link;  // the Asio socket and its reader thread
+  struct Link;  // the Asio socket; the threads that wait read it
   struct Transaction {
     ippdme::Tag tag;
     std::string line;
@@ -93,6 +95,11 @@ class IppDmeCmm : public CmmDriver {
   [[noreturn]] void fail(const ippdme::ServerError& e, const char* what, const std::string& method);
   void clear_errors(const char* what);
   void on_line(const std::string& line);
+  // Reads and hands out what has come, waiting up to max_wait for it; with io_mutex_ held.
+  void pump(std::chrono::milliseconds max_wait);
+  // Until ready() (checked under mutex_), the link goes down or out of step, or timeout_s: false then.
+  bool await(const std::function<bool()>& ready, double timeout_s);
+  void drain();  // reads what is there, if nobody else is reading
   void on_link_down();
   void link_out_of_step();
   void write_line(const std::string& line, const char* what);
@@ -124,6 +131,7 @@ class IppDmeCmm : public CmmDriver {
   std::mutex send_mutex_;   // one command between sending and its acknowledgement
   std::mutex query_mutex_;  // a Get is not queued behind a motion: see read_status
   std::mutex write_mutex_;
+  std::mutex io_mutex_;  // the thread that reads the socket (one that waits for an answer)
   mutable std::mutex mutex_;  // what the reader thread hands over
   std::condition_variable wake_;
   std::map<std::string, std::shared_ptr<Transaction>> open_;  // by tag text
