@@ -164,17 +164,21 @@ void bm_grbl_bare_status(benchmark::State& state) {
   tcgetattr(fd, &raw);
   cfmakeraw(&raw);
   tcsetattr(fd, TCSANOW, &raw);
-  char line[512];
+  // Lines are split out of what each read returns: the banner and the report may come in one read.
+  std::string pending;
+  char chunk[512];
   auto report = [&] {
     if (::write(fd, "?", 1) != 1) return false;
-    std::size_t got = 0;
-    while (got == 0 || line[got - 1] != '\n') {
-      const ssize_t n = ::read(fd, line + got, sizeof line - got);
+    for (;;) {
+      for (std::size_t end; (end = pending.find('\n')) != std::string::npos;) {
+        const bool is_report = pending[0] == '<';
+        pending.erase(0, end + 1);
+        if (is_report) return true;  // anything else (the banner, a message) is not the report
+      }
+      const ssize_t n = ::read(fd, chunk, sizeof chunk);
       if (n <= 0) return false;
-      got += static_cast<std::size_t>(n);
-      if (line[0] != '<') got = 0;  // the banner or another line: not the report
+      pending.append(chunk, static_cast<std::size_t>(n));
     }
-    return true;
   };
   for (auto _ : state)
     if (!report()) return state.SkipWithError("no status report");
