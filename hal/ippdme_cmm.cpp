@@ -185,7 +185,6 @@ void IppDmeCmm::on_connect() {
   if (ec == asio::error::would_block) throw Timeout("no TCP connection within " + std::to_string(settings_.connect_timeout_s) + " s");
   if (ec) throw CommLost(ec.message());
   link->socket.set_option(asio::ip::tcp::no_delay(true));  // one short line per round trip
-  link->io.restart();
   if (log_) log_->note("connected to " + where());
   link_ = std::move(link);
   start_session();
@@ -435,8 +434,13 @@ std::shared_ptr<IppDmeCmm::Transaction> IppDmeCmm::send(Kind kind, const std::st
   std::lock_guard send_lock(send_mutex_);
   auto tx = std::make_shared<Transaction>();
   {
-    std::lock_guard lock(mutex_);
-    if (link_down_ || !link_) throw CommLost(std::string(what) + ": the I++ link is down");
+    std::unique_lock lock(mutex_);
+    if (link_down_) {
+      // The server closed the connection while nobody waited on it: down until connect().
+      lock.unlock();
+      link_out_of_step();
+      throw CommLost(std::string(what) + ": the I++ server closed the connection");
+    }
     tx->tag = next_tag(kind == Kind::fast);
     tx->wake_on_ack = kind != Kind::query;
     tx->line = ippdme::format_command({tx->tag, method, args});

@@ -297,7 +297,7 @@ std::optional<Reply> parse_reply(std::string_view line) {
 
 std::string format_reply(const Reply& reply) {
   std::string out = format_tag(reply.tag) + " " + static_cast<char>(reply.kind);
-  if (reply.kind == ReplyKind::data) out += " " + format_terms(reply.data);
+  if (reply.kind == ReplyKind::data) out.append(" ").append(format_terms(reply.data));
   if (reply.kind == ReplyKind::error) {
     char head[32];
     std::snprintf(head, sizeof head, "Error(%d, %04d, ", reply.error.severity, reply.error.code);
@@ -305,7 +305,11 @@ std::string format_reply(const Reply& reply) {
     const std::string& m = reply.error.method;
     bool name = !m.empty() && std::isalpha(static_cast<unsigned char>(m[0]));
     for (char c : m) name = name && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.');
-    out += std::string(" ") + head + (name ? m : "\"" + m + "\"") + ", \"" + reply.error.text + "\")";
+    // Appended piece by piece: GCC 12 at -O3 warns falsely (-Wrestrict) on "…" + std::string&&.
+    out.append(" ").append(head);
+    if (name) out.append(m);
+    else out.append("\"").append(m).append("\"");
+    out.append(", \"").append(reply.error.text).append("\")");
   }
   return out;
 }

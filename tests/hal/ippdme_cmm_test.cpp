@@ -277,6 +277,12 @@ TEST(IppDmeCmm, ADroppedConnectionIsCommLostAndTheMotionIsNeverReplayed) {
   EXPECT_EQ(c.server.count("StartSession"), 2);  // a new session; nothing from the old one resent
   c.cmm.move({Vec3(300, 300, 290), 0});
   EXPECT_EQ(c.server.count("GoTo"), 2);
+  // Closed while nobody waited on it: the next status() finds it out, and the link is down.
+  c.server.drop();
+  EXPECT_THROW(c.cmm.status(), CommLost);
+  EXPECT_THROW(c.cmm.status(), StateError);
+  c.cmm.connect();
+  EXPECT_EQ(c.cmm.status().lifecycle, Lifecycle::connected);
 }
 
 TEST(IppDmeCmm, ALineThatIsNotIppIsAProtocolFaultAndDropsTheLink) {
