@@ -121,8 +121,7 @@ class IppDmeServer {
   // (nothing once it has ended); end_locked writes a transaction's final line.
   // `delayed`: a line of a counted command, which reply_delay_s holds back.
   void send_locked(const hal::ippdme::Reply& reply, bool delayed = false);
-  void report_end_of_motion_locked();
-  bool end_reported_ = false;  // the worker reported a motion's end: the daemon thread need not
+  void report_end_of_motion_locked();  // the daemon's report as a motion command ends
   void error_locked(hal::ippdme::Tag tag, int severity, int code, const std::string& method, const std::string& text);
   void refuse_locked(hal::ippdme::Tag tag, const std::string& method, int code, const std::string& text);
   void end_locked(Transaction& tx, hal::ippdme::Reply reply);
@@ -159,6 +158,7 @@ class IppDmeServer {
   std::optional<Transaction> current_;  // the one the worker runs
   std::optional<Daemon> daemon_;
   std::uint64_t daemons_ = 0;
+  bool end_reported_ = false;  // the worker reported a motion's end: the daemon thread need not
   std::map<std::string, double, std::less<>> properties_;
   std::vector<std::string> pt_report_;  // OnPtMeasReport's items, in order
   int commands_ = 0;

@@ -38,7 +38,7 @@ TEST(DaemonConfig, ADriverThatIsNoStringIsAProblemAtItsPointer) {
 
 TEST(DaemonConfig, AnUnknownDriverIsAProblemListingTheKnownOnes) {
   const auto problems = problems_of({{"machine", {{"driver", "ethercat"}}}});
-  EXPECT_TRUE(names(problems, "/machine/driver: must be one of grbl, modbus, serial, sim, not \"ethercat\""))
+  EXPECT_TRUE(names(problems, "/machine/driver: must be one of grbl, ippdme, modbus, serial, sim, not \"ethercat\""))
       << ::testing::PrintToString(problems);
 }
 
