@@ -18,6 +18,7 @@
 
 #include "hal/description/json_fields.hpp"
 #include "hal/probe_move_check.hpp"
+#include "hal/qualification.hpp"
 
 namespace cmm::hal {
 
@@ -555,14 +556,7 @@ void GrblCmm::do_select_tip(const std::string& tip_id) {
 
 void GrblCmm::do_record_qualification(const std::string& tip_id, const description::TipQualification& q) {
   std::lock_guard lock(mutex_);
-  for (auto& tip : settings_.machine.tips)
-    if (tip.id == tip_id) {
-      tip.ball_radius_mm = q.ball_radius_mm;
-      tip.offset = q.offset;
-      tip.qualification = q;
-      return;
-    }
-  throw std::invalid_argument("no tip \"" + tip_id + "\" in the Grbl driver's config");
+  record_on(settings_.machine, tip_id, q, "the Grbl driver's config");
 }
 
 }  // namespace cmm::hal

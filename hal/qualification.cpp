@@ -73,4 +73,16 @@ description::TipQualification qualify(Cmm& cmm, const std::string& tip_id, const
   return q;
 }
 
+void record_on(description::MachineDescription& machine, const std::string& tip_id,
+               const description::TipQualification& q, const std::string& owner) {
+  for (auto& tip : machine.tips)
+    if (tip.id == tip_id) {
+      tip.ball_radius_mm = q.ball_radius_mm;
+      tip.offset = q.offset;
+      tip.qualification = q;
+      return;
+    }
+  throw std::invalid_argument("no tip \"" + tip_id + "\" in " + owner);
+}
+
 }  // namespace cmm::hal

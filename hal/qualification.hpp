@@ -26,4 +26,10 @@ struct QualificationOptions {
 // what the machine reports (a miss means the sphere is not where the description says).
 description::TipQualification qualify(Cmm& cmm, const std::string& tip_id, const QualificationOptions& options = {});
 
+// How a driver that keeps the tips on its own side (Grbl, I++ DME) records a qualification: the
+// tip's radius and offset become the qualified ones. Throws std::invalid_argument naming `owner`
+// ("the Grbl driver's config") for an unknown tip.
+void record_on(description::MachineDescription& machine, const std::string& tip_id,
+               const description::TipQualification& q, const std::string& owner);
+
 }  // namespace cmm::hal
