@@ -11,6 +11,7 @@
 #include "geometry/edge_point.hpp"
 #include "planner/bore_measurement.hpp"
 #include "planner/edge_compensation.hpp"
+#include "planner/inspection.hpp"
 #include "planner/touch_planning.hpp"
 
 namespace cmm::planner {
@@ -74,6 +75,9 @@ struct MeasurementResult {
   std::vector<HoleResult> holes;  // one per model hole
   ResultSummary summary;
   std::vector<std::string> notes;  // job-wide: touches that belong to no feature, assumptions
+  // Against the job's nominal model, with tolerances and verdicts; absent when it named none (the
+  // deviations above are against the scan, the job's reference, and carry no verdict).
+  std::optional<InspectionResult> inspection;
 };
 
 ResultSummary summarise(const std::vector<EdgeResult>& edges, const std::vector<HoleResult>& holes);

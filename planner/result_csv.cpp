@@ -45,6 +45,14 @@ class Row {
   std::string cells_;
 };
 
+// The inspection's cells of one characteristic: deviation, U, limits, verdict (all empty without a nominal).
+void characteristic(Row& row, const Characteristic* c) {
+  const bool measured = c && c->verdict != Verdict::not_measured;
+  row.text(measured ? fixed(c->deviation_mm, kDecimals) : "").text(measured ? fixed(c->uncertainty_mm, kDecimals) : "");
+  row.text(c ? fixed(c->zone.lower_mm, kDecimals) : "").text(c ? fixed(c->zone.upper_mm, kDecimals) : "");
+  row.text(c ? to_string(c->verdict) : "");
+}
+
 std::string header(std::initializer_list<const char*> names) {
   Row row(false);
   for (const char* name : names) row.text(name);
@@ -55,13 +63,18 @@ std::string header(std::initializer_list<const char*> names) {
 
 std::string to_csv(const MeasurementResult& result) {
   std::string out = header({"id", "kind", "method", "status", "x_S", "y_S", "z_S", "x_M", "y_M", "z_M", "deviation_mm",
-                            "sigma_mm", "reason"});
-  for (const EdgeResult& e : result.edges) {
+                            "sigma_mm", "nominal_deviation_mm", "uncertainty_mm", "tolerance_lower_mm",
+                            "tolerance_upper_mm", "verdict", "reason"});
+  const InspectionResult* inspection = result.inspection ? &*result.inspection : nullptr;
+  for (std::size_t i = 0; i < result.edges.size(); ++i) {
+    const EdgeResult& e = result.edges[i];
     const bool measured = e.status == FeatureStatus::measured;
     Row row(measured);
     row.text(std::to_string(e.id)).text(geometry::to_string(e.kind)).text(to_string(e.method)).text(to_string(e.status));
     row.vector(measured ? &e.scan->position : nullptr).vector(measured ? &e.machine->position : nullptr);
-    row.value(e.deviation.signed_mm).value(measured ? e.scan->sigma_mm : 0).text(quoted(e.reason));
+    row.value(e.deviation.signed_mm).value(measured ? e.scan->sigma_mm : 0);
+    characteristic(row, inspection && i < inspection->edges.size() ? &inspection->edges[i].profile : nullptr);
+    row.text(quoted(e.reason));
     out += row.line();
   }
   return out;
@@ -70,8 +83,13 @@ std::string to_csv(const MeasurementResult& result) {
 std::string holes_to_csv(const MeasurementResult& result) {
   std::string out = header({"id", "status", "x_S", "y_S", "z_S", "x_M", "y_M", "z_M", "diameter_mm", "nominal_diameter_mm",
                             "diameter_deviation_mm", "centre_deviation_mm", "roundness_mm", "centre_sigma_mm",
-                            "diameter_sigma_mm", "reason"});
-  for (const HoleResult& h : result.holes) {
+                            "diameter_sigma_mm", "diameter_nominal_deviation_mm", "diameter_uncertainty_mm",
+                            "diameter_lower_mm", "diameter_upper_mm", "diameter_verdict", "position_mm",
+                            "position_uncertainty_mm", "position_lower_mm", "position_upper_mm", "position_verdict",
+                            "verdict", "reason"});
+  const InspectionResult* inspection = result.inspection ? &*result.inspection : nullptr;
+  for (std::size_t i = 0; i < result.holes.size(); ++i) {
+    const HoleResult& h = result.holes[i];
     const bool measured = h.status == FeatureStatus::measured;
     const BoreMeasurement none;
     const BoreMeasurement& bore = measured ? *h.scan : none;
@@ -80,6 +98,10 @@ std::string holes_to_csv(const MeasurementResult& result) {
     row.vector(measured ? &h.scan->centre : nullptr).vector(measured ? &h.machine->centre : nullptr);
     row.value(bore.diameter_mm).text(fixed(h.nominal_diameter_mm, kDecimals)).value(h.diameter_deviation_mm);
     row.value(h.centre_deviation_mm).value(bore.roundness_mm).value(bore.centre_sigma_mm).value(bore.diameter_sigma_mm);
+    const HoleInspection* hole = inspection && i < inspection->holes.size() ? &inspection->holes[i] : nullptr;
+    characteristic(row, hole ? &hole->diameter : nullptr);
+    characteristic(row, hole ? &hole->position : nullptr);
+    row.text(hole ? to_string(worse(hole->diameter.verdict, hole->position.verdict)) : "");
     row.text(quoted(h.reason));
     out += row.line();
   }

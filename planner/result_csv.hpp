@@ -8,11 +8,13 @@
 
 namespace cmm::planner {
 
-// id,kind,method,status,x_S,y_S,z_S,x_M,y_M,z_M,deviation_mm,sigma_mm,reason
+// id,kind,method,status,x_S,y_S,z_S,x_M,y_M,z_M,deviation_mm,sigma_mm,nominal_deviation_mm,uncertainty_mm,
+// tolerance_lower_mm,tolerance_upper_mm,verdict,reason (the five inspection cells empty without a nominal)
 std::string to_csv(const MeasurementResult& result);
 
 // id,status,x_S,y_S,z_S,x_M,y_M,z_M,diameter_mm,nominal_diameter_mm,diameter_deviation_mm,
-// centre_deviation_mm,roundness_mm,centre_sigma_mm,diameter_sigma_mm,reason
+// centre_deviation_mm,roundness_mm,centre_sigma_mm,diameter_sigma_mm, then diameter_ and position_ each
+// {nominal_deviation_mm (position: position_mm), uncertainty_mm, lower_mm, upper_mm, verdict}, verdict, reason
 std::string holes_to_csv(const MeasurementResult& result);
 
 }  // namespace cmm::planner

@@ -2,6 +2,7 @@
 #include "planner/result_json.hpp"
 
 #include "hal/description/eigen_json.hpp"
+#include "planner/inspection_json.hpp"
 
 namespace cmm::planner {
 
@@ -119,6 +120,12 @@ json to_json(const MeasurementResult& result) {
   json edges = json::array(), holes = json::array();
   for (const EdgeResult& e : result.edges) edges.push_back(edge_json(e));
   for (const HoleResult& h : result.holes) holes.push_back(hole_json(h));
+  // Against the nominal, beside the deviation against the scan: the two answer different questions.
+  const InspectionResult* inspection = result.inspection ? &*result.inspection : nullptr;
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    edges[i]["inspection"] = inspection && i < inspection->edges.size() ? to_json(inspection->edges[i]) : json(nullptr);
+  for (std::size_t i = 0; i < holes.size(); ++i)
+    holes[i]["inspection"] = inspection && i < inspection->holes.size() ? to_json(inspection->holes[i]) : json(nullptr);
   return {{"schema", result_schema_id},
           {"units", "mm"},
           {"frame", "S"},
@@ -127,6 +134,7 @@ json to_json(const MeasurementResult& result) {
           {"summary", summary_json(result.summary)},
           {"edge_points", std::move(edges)},
           {"holes", std::move(holes)},
+          {"inspection", inspection ? to_json(*inspection) : json(nullptr)},
           {"notes", result.notes}};
 }
 
