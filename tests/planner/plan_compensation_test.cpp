@@ -290,17 +290,19 @@ TEST(ResultExport, CsvReadsBackRowForRow) {
   const auto rows = parse_csv(to_csv(result));
   ASSERT_EQ(rows.size(), result.edges.size() + 1);
   EXPECT_EQ(rows[0], (std::vector<std::string>{"id", "kind", "method", "status", "x_S", "y_S", "z_S", "x_M", "y_M", "z_M",
-                                               "deviation_mm", "sigma_mm", "reason"}));
+                                               "deviation_mm", "sigma_mm", "nominal_deviation_mm", "uncertainty_mm",
+                                               "tolerance_lower_mm", "tolerance_upper_mm", "verdict", "reason"}));
   std::map<std::string, int> statuses;
   for (std::size_t i = 0; i < result.edges.size(); ++i) {
     const EdgeResult& e = result.edges[i];
     const std::vector<std::string>& row = rows[i + 1];
-    ASSERT_EQ(row.size(), 13u) << "row " << i + 1;
+    ASSERT_EQ(row.size(), 18u) << "row " << i + 1;
     EXPECT_EQ(row[0], std::to_string(e.id));
     EXPECT_EQ(row[1], geometry::to_string(e.kind));
     EXPECT_EQ(row[2], to_string(e.method));
     EXPECT_EQ(row[3], to_string(e.status));
-    EXPECT_EQ(row[12], e.reason);
+    EXPECT_EQ(row[17], e.reason);
+    for (std::size_t cell = 12; cell < 17; ++cell) EXPECT_EQ(row[cell], "") << "no nominal, no inspection cells";
     ++statuses[row[3]];
     if (e.status != FeatureStatus::measured) {
       for (int k = 4; k < 12; ++k) EXPECT_EQ(row[static_cast<std::size_t>(k)], "") << "row " << i + 1 << " column " << k;
@@ -320,14 +322,16 @@ TEST(ResultExport, CsvReadsBackRowForRow) {
 
   const auto holes = parse_csv(holes_to_csv(result));
   ASSERT_EQ(holes.size(), result.holes.size() + 1);
-  ASSERT_EQ(holes[0].size(), 16u);
+  ASSERT_EQ(holes[0].size(), 27u);
   EXPECT_EQ(holes[0][8], "diameter_mm");
+  EXPECT_EQ(holes[0][15], "diameter_nominal_deviation_mm");
+  EXPECT_EQ(holes[0][25], "verdict");
   for (std::size_t i = 0; i < result.holes.size(); ++i) {
     const HoleResult& h = result.holes[i];
-    ASSERT_EQ(holes[i + 1].size(), 16u);
+    ASSERT_EQ(holes[i + 1].size(), 27u);
     EXPECT_EQ(holes[i + 1][1], to_string(h.status));
     EXPECT_NEAR(std::stod(holes[i + 1][9]), h.nominal_diameter_mm, 0.5e-6);
-    EXPECT_EQ(holes[i + 1][15], h.reason);
+    EXPECT_EQ(holes[i + 1][26], h.reason);
     if (h.status != FeatureStatus::measured) continue;
     EXPECT_NEAR(std::stod(holes[i + 1][8]), h.scan->diameter_mm, 0.5e-6);
     EXPECT_NEAR(std::stod(holes[i + 1][10]), h.diameter_deviation_mm, 0.5e-6);
