@@ -1,8 +1,11 @@
 // cmmctl: the operator's command line for cmmd — submit a model and watch the job, query and steer
 // jobs and the machine, list serial ports. Talks JSON-RPC over the Unix socket or TCP.
 #include <CLI/CLI.hpp>
+#include <cctype>
 #include <unistd.h>
 
+#include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -15,6 +18,8 @@
 #include "daemon/client/progress_bar.hpp"
 #include "daemon/client/rpc_client.hpp"
 #include "daemon/client/rpc_error.hpp"
+#include "daemon/client/taught_corners.hpp"
+#include "geometry/atomic_file.hpp"
 #include "hal/serial_ports.hpp"
 
 namespace {
@@ -77,6 +82,51 @@ void print_record(const json& r) {
               r.value("name", "").c_str(), r.value("reason", "").empty() ? "" : ("  — " + r["reason"].get<std::string>()).c_str());
 }
 
+std::string counts_text(const json& c) {
+  return std::to_string(c.value("pass", 0)).append(" pass, ") + std::to_string(c.value("fail", 0)).append(" fail, ") +
+         std::to_string(c.value("undecided", 0)).append(" undecided, ") +
+         std::to_string(c.value("not_measured", 0)).append(" not measured");
+}
+
+std::string characteristic_text(const json& c) {
+  const json& t = c.at("tolerance_mm");
+  return fmt("%+.4f mm", c.value("deviation_mm", 0.0)) + fmt(" (U %.4f, ", c.value("uncertainty_mm", 0.0)) +
+         fmt("tolerance [%+.4f, ", t.at(0).get<double>()) + fmt("%+.4f]) ", t.at(1).get<double>()) +
+         c.value("verdict", "");
+}
+
+// The inspection's verdict, its counts, and the features that did not pass (the first 20 of them).
+void print_verdict(const json& result) {
+  const json& inspection = result.value("inspection", json(nullptr));
+  if (inspection.is_null()) {
+    std::printf("verdict     none: the job named no nominal model (deviations are against the scan)\n");
+    return;
+  }
+  std::string verdict = inspection.value("verdict", "");
+  for (char& c : verdict) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  const json& nominal = inspection.at("nominal");
+  std::printf("verdict     %s against %s (%s)\n", verdict.c_str(), nominal.value("model", "").c_str(),
+              nominal.value("method", "").c_str());
+  std::printf("            edge points %s\n", counts_text(inspection.at("counts").at("edge_points")).c_str());
+  std::printf("            holes       %s\n", counts_text(inspection.at("counts").at("holes")).c_str());
+  int shown = 0;
+  for (const json& e : result.at("edge_points")) {
+    const json& i = e.value("inspection", json(nullptr));
+    if (i.is_null() || i.value("verdict", "") == "pass" || i.value("verdict", "") == "not_measured") continue;
+    if (shown++ < 20) std::printf("  edge %-5d %s\n", e.at("id").get<int>(), characteristic_text(i).c_str());
+  }
+  for (const json& h : result.at("holes")) {
+    const json& i = h.value("inspection", json(nullptr));
+    if (i.is_null()) continue;
+    for (const char* which : {"diameter", "position"}) {
+      const json& c = i.at(which);
+      if (c.value("verdict", "") == "pass" || c.value("verdict", "") == "not_measured") continue;
+      if (shown++ < 20) std::printf("  hole %-3d %-8s %s\n", h.at("id").get<int>(), which, characteristic_text(c).c_str());
+    }
+  }
+  if (shown > 20) std::printf("  ... and %d more not passed (cmmctl result ID --json)\n", shown - 20);
+}
+
 // The result as an operator reads it: what was found, touched, registered and how far it is off.
 void print_result_summary(const json& result) {
   const json& s = result.at("summary");
@@ -97,6 +147,7 @@ void print_result_summary(const json& result) {
               s.value("max_centre_deviation_mm", 0.0), s.value("max_diameter_deviation_mm", 0.0));
   if (result.contains("machine_time_s"))
     std::printf("machine     %s of machine time\n", duration_text(result["machine_time_s"].get<double>()).c_str());
+  print_verdict(result);
 }
 
 // Follows a job until it ends; a paused job is waited on (another terminal may resume it).
@@ -163,6 +214,74 @@ json job_request(const std::string& model, const CLI::App& submit, double scale,
   return r;
 }
 
+volatile std::sig_atomic_t interrupted = 0;
+
+std::string position_text(const json& p) {
+  return fmt("(%.4f, ", p.at(0).get<double>()) + fmt("%.4f, ", p.at(1).get<double>()) + fmt("%.4f)", p.at(2).get<double>());
+}
+
+// A step jog: machine.jog, then machine.status until that jog has ended. Ctrl-C stops it (the
+// operator let go). 0 when it ended by itself (its distance, or a face of the travel box), 1 when a
+// fault ended it (a contact: EarlyTrigger; a stop: Aborted), 130 on Ctrl-C.
+int step_jog(RpcClient& client, const json& params, double distance_mm, bool raw_json) {
+  const json started = client.call("machine.jog", params, 60);
+  const int id = started.at("jog").get<int>();
+  const double speed_mm_s = started.at("speed_mm_s").get<double>();
+  std::signal(SIGINT, [](int) { interrupted = 1; });
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(2 * distance_mm / speed_mm_s + 30);
+  json status;
+  for (;;) {
+    status = client.call("machine.status");
+    const json& jog = status.value("jog", json(nullptr));
+    if (jog.is_null() || jog.value("id", 0) != id) break;
+    if (interrupted != 0 || std::chrono::steady_clock::now() > deadline) {
+      client.call("machine.jog_stop");
+      if (interrupted == 0) throw std::runtime_error(std::string("jog ").append(std::to_string(id)).append(" did not end in time: stopped"));
+      std::fprintf(stderr, "cmmctl jog: interrupted: jog %d stopped\n", id);
+      return 130;
+    }
+    usleep(50000);
+  }
+  const json& last = status.value("last_jog", json(nullptr));
+  const bool mine = last.is_object() && last.value("id", 0) == id;
+  if (raw_json) {
+    std::cout << json{{"jog", id}, {"position", status.at("position")}, {"ended", mine ? last : json(nullptr)}}.dump(1) << "\n";
+  } else {
+    std::printf("position %s\n", position_text(status.at("position")).c_str());
+    if (mine) std::printf("jog %d   %s\n", id, last.value("reason", "").c_str());
+    if (!status.value("fault", json(nullptr)).is_null())
+      std::printf("fault    %s: %s\n", status["fault"]["kind"].get<std::string>().c_str(),
+                  status["fault"]["message"].get<std::string>().c_str());
+  }
+  return mine && !last.value("fault", json(nullptr)).is_null() ? 1 : 0;
+}
+
+// The machine's position as corner `corner` of a measure_plate file, written atomically.
+void teach(RpcClient& client, int corner, const std::string& file, bool raw_json) {
+  const json status = client.call("machine.status");
+  if (!status.value("homed", false)) throw std::runtime_error("the machine is not homed: its position means nothing yet");
+  if (!status.value("jog", json(nullptr)).is_null() || status.value("moving", false))
+    throw std::runtime_error("the machine is moving: teach once it stands still");
+  const json& p = status.at("position");
+  const Eigen::Vector3d machine(p.at(0).get<double>(), p.at(1).get<double>(), p.at(2).get<double>());
+  json contents = nullptr;
+  if (std::filesystem::exists(file)) contents = read_json_file(file);
+  TaughtCorner taught;
+  try {
+    taught = with_taught_corner(contents, corner, machine);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(file + ": " + e.what());
+  }
+  geometry::write_atomically(file, taught.file.dump(1) + "\n");
+  if (raw_json) {
+    std::cout << json{{"file", file}, {"id", corner}, {"machine", p}, {"replaced", taught.replaced}}.dump(1) << "\n";
+    return;
+  }
+  std::printf("%s: corner %d rough machine position %s%s\n", file.c_str(), corner, position_text(p).c_str(),
+              taught.replaced.is_array() ? std::string(" (was ").append(position_text(taught.replaced)).append(")").c_str() : "");
+  std::printf("%s\n", taught.summary.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -205,13 +324,27 @@ int main(int argc, char** argv) {
   add_job_options(submit);
   submit->add_flag("-w,--watch", watch_job, "follow the job with a progress bar until it ends");
   submit->add_flag("--requalify", requalify, "qualify the tip again by itself if the machine loses its qualification");
+  std::string nominal, tolerances_file;
+  bool fit_nominal = false;
+  double profile_tol = 0, position_tol = 0;
+  std::vector<double> diameter_tol;
+  submit->add_option("--nominal", nominal, "the part's nominal model (a CAD mesh, in the scan's frame unless --fit-nominal): "
+                                           "verdicts against the tolerances");
+  submit->add_flag("--fit-nominal", fit_nominal, "best-fit the nominal onto the scan (point-to-plane ICP)");
+  submit->add_option("--tolerances", tolerances_file, "JSON file of tolerances (docs/api.md); the flags below override it");
+  submit->add_option("--profile-tol", profile_tol, "edge profile tolerance, ± mm")->check(CLI::NonNegativeNumber);
+  submit->add_option("--hole-diameter-tol", diameter_tol, "hole diameter tolerance: LOWER UPPER, mm")->expected(2);
+  submit->add_option("--hole-position-tol", position_tol, "hole position tolerance (zone diameter), mm")->check(CLI::NonNegativeNumber);
+  CLI::App* report = app.add_subcommand("report", "a finished job's HTML report");
+  report->add_option("ID", id)->required();
+  report->add_option("-o,--output", output, "write to this file (default: report-ID.html)");
   CLI::App* preview = app.add_subcommand("preview", "plan a job and dry-run it on a simulator of the reference mesh");
   add_job_options(preview);
   app.add_subcommand("status", "the machine and the running job");
   app.add_subcommand("jobs", "every job, oldest first");
   CLI::App* result = app.add_subcommand("result", "a finished job's result");
   result->add_option("ID", id)->required();
-  result->add_option("-f,--format", format, "json or csv")->check(CLI::IsMember({"json", "csv"}));
+  result->add_option("-f,--format", format, "json, csv or qif")->check(CLI::IsMember({"json", "csv", "qif"}));
   result->add_option("-o,--output", output, "write to this file instead of stdout");
   CLI::App* watch_cmd = app.add_subcommand("watch", "follow a job until it ends");
   watch_cmd->add_option("ID", id)->required();
@@ -224,7 +357,22 @@ int main(int argc, char** argv) {
   app.add_subcommand("reset", "clear a latched abort or a released e-stop");
   CLI::App* qualify = app.add_subcommand("qualify", "qualify a tip on the reference sphere");
   qualify->add_option("--tip", tip, "tip id (default: the active one)");
+  std::vector<double> jog_step;
+  double jog_distance = 0, jog_speed = 0;
+  CLI::App* jog = app.add_subcommand("jog", "move the machine by hand: a guarded step along DX DY DZ (its length in mm, "
+                                            "or --distance), stopped by any contact; Ctrl-C stops it");
+  jog->add_option("STEP", jog_step, "DX DY DZ")->required()->expected(3);
+  jog->add_option("--distance", jog_distance, "mm along the step's direction (default: the step's length)")->check(CLI::PositiveNumber);
+  jog->add_option("--speed", jog_speed, "mm/s (default and limit: cmmd.json jog.max_speed_mm_s)")->check(CLI::PositiveNumber);
+  app.add_subcommand("jog-stop", "stop a jog at once");
+  int corner = 0;
+  std::string corners_file;
+  CLI::App* teach_cmd = app.add_subcommand("teach", "take the machine's position as a plate corner's rough position "
+                                                    "(measure_plate: rough_machine)");
+  teach_cmd->add_option("CORNER_ID", corner, "the plate corner (1, 2, …)")->required();
+  teach_cmd->add_option("--file", corners_file, "the measure_plate file (created if missing; the rest kept)")->required();
   app.add_subcommand("ports", "serial ports on this computer, with USB ids");
+  app.add_subcommand("dashboard", "the dashboard's URL to open in a browser (with the operator's token when cmmd.json sets none)");
   CLI11_PARSE(app, argc, argv);
 
   const std::string command = app.get_subcommands().front()->get_name();
@@ -259,6 +407,16 @@ int main(int argc, char** argv) {
       }
       json submitted = request;
       if (requalify) submitted["requalify"] = true;
+      if (!nominal.empty()) {
+        std::string nominal_ref = nominal;
+        if (nominal.rfind("file:", 0) != 0) nominal_ref = upload_model(client, nominal, 1u << 20, {});
+        submitted["nominal"] = {{"model", nominal_ref}, {"placement", fit_nominal ? "fit" : "given"}};
+      }
+      json tolerances = tolerances_file.empty() ? json::object() : read_json_file(tolerances_file);
+      if (submit->count("--profile-tol")) tolerances["edge_profile_mm"] = profile_tol;
+      if (submit->count("--hole-diameter-tol")) tolerances["hole_diameter_mm"] = diameter_tol;
+      if (submit->count("--hole-position-tol")) tolerances["hole_position_mm"] = position_tol;
+      if (!tolerances.empty()) submitted["tolerances"] = tolerances;
       const json record = client.call("job.submit", submitted, 120);
       id = record.at("id").get<int>();
       std::printf("job %d queued (%s)\n", id, ref.c_str());
@@ -280,6 +438,9 @@ int main(int argc, char** argv) {
       if (s.contains("position") && s["position"].is_array())
         std::printf("position (%.4f, %.4f, %.4f) tip %s\n", s["position"][0].get<double>(), s["position"][1].get<double>(),
                     s["position"][2].get<double>(), s.value("tip", "").c_str());
+      if (const json jog = s.value("jog", json(nullptr)); jog.is_object())
+        std::printf("jog      %d along %s at %g mm/s\n", jog.value("id", 0), position_text(jog.at("direction")).c_str(),
+                    jog.value("speed_mm_s", 0.0));
       if (!s.value("fault", json(nullptr)).is_null())
         std::printf("fault    %s: %s\n", s["fault"]["kind"].get<std::string>().c_str(), s["fault"]["message"].get<std::string>().c_str());
       if (!s.value("job", json(nullptr)).is_null()) print_record(client.call("job.get", {{"job", s["job"]}}));
@@ -293,10 +454,19 @@ int main(int argc, char** argv) {
         if (!g.raw_json) print_record(r);
       return 0;
     }
+    if (command == "report") {
+      const json r = client.call("job.report", {{"job", id}}, 120);
+      const std::string file = output.empty() ? "report-" + std::to_string(id) + ".html" : output;
+      geometry::write_atomically(file, r.at("html").get<std::string>());
+      std::printf("%s: the report of job %d\n", file.c_str(), id);
+      return 0;
+    }
     if (command == "result") {
       const json r = client.call("job.result", {{"job", id}, {"format", format}}, 120);
-      const std::string text = format == "csv" ? r.at("csv").get<std::string>() : r.dump(1) + "\n";
-      if (output.empty()) {
+      const std::string text = format == "json" ? r.dump(1) + "\n" : r.at(format).get<std::string>();
+      if (output.empty() && format == "json" && !g.raw_json) {
+        print_result_summary(r);  // an operator at a terminal; --json or -o for the whole JSON
+      } else if (output.empty()) {
         std::cout << text;
       } else {
         std::ofstream out(output);
@@ -308,7 +478,22 @@ int main(int argc, char** argv) {
     if (command == "pause" || command == "cancel") show(client.call("job." + command, {{"job", id}}));
     else if (command == "resume") show(client.call("job.resume", {{"job", id}, {"reregister", reregister}}));
     else if (command == "home") show(client.call("machine.home", json::object(), 600));
+    else if (command == "dashboard") {
+      const json d = client.call("server.dashboard");
+      if (g.raw_json) std::cout << d.dump(1) << "\n";
+      else std::printf("%s\n", d.at("url").get<std::string>().c_str());
+    }
     else if (command == "stop" || command == "reset") show(client.call("machine." + command));
+    else if (command == "jog-stop") show(client.call("machine.jog_stop"));
+    else if (command == "teach") teach(client, corner, corners_file, g.raw_json);
+    else if (command == "jog") {
+      const Eigen::Vector3d step(jog_step[0], jog_step[1], jog_step[2]);
+      if (step.norm() == 0) throw std::runtime_error("DX DY DZ must not all be zero");
+      const double distance = jog->count("--distance") ? jog_distance : step.norm();
+      json params = {{"direction", {step.x(), step.y(), step.z()}}, {"distance_mm", distance}};
+      if (jog->count("--speed")) params["speed_mm_s"] = jog_speed;
+      return step_jog(client, params, distance, g.raw_json);
+    }
     else if (command == "qualify") {
       json params = json::object();
       if (!tip.empty()) params["tip"] = tip;

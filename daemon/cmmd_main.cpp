@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <mutex>
 #include <thread>
@@ -14,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/daemon_config.hpp"
+#include "daemon/dashboard_access.hpp"
 #include "daemon/driver_factory.hpp"
 #include "daemon/job_manager.hpp"
 #include "daemon/job_store.hpp"
@@ -22,6 +24,7 @@
 #include "daemon/rpc_server.hpp"
 #include "daemon/service_methods.hpp"
 #include "daemon/service_notifier.hpp"
+#include "daemon/web_server.hpp"
 #include "hal/description/json_fields.hpp"
 
 #ifndef CMMD_VERSION
@@ -47,8 +50,10 @@ void set_up_logging(const std::string& level) {
 // command holds the machine. Never the watchdog: an unplugged cable must not restart cmmd.
 class MachineMonitor {
  public:
-  MachineMonitor(MachineLink& machine, JobManager& jobs, RpcServer& server, ServiceNotifier& notifier)
-      : machine_(machine), jobs_(jobs), server_(server), notifier_(notifier), thread_([this] { loop(); }) {}
+  using Notify = std::function<void(const std::string& topic, const std::string& method, const nlohmann::json& params)>;
+
+  MachineMonitor(MachineLink& machine, JobManager& jobs, Notify notify, ServiceNotifier& notifier)
+      : machine_(machine), jobs_(jobs), notify_(std::move(notify)), notifier_(notifier), thread_([this] { loop(); }) {}
   ~MachineMonitor() {
     {
       std::lock_guard lock(mutex_);
@@ -79,7 +84,7 @@ class MachineMonitor {
       if (state != last) {
         spdlog::info("machine: {} ({}){}", s["link"].get<std::string>(), s["lifecycle"].get<std::string>(),
                      s["fault"].is_null() ? "" : ", " + s["fault"]["kind"].get<std::string>());
-        server_.notify("machine", "machine.state", state);
+        notify_("machine", "machine.state", state);
         last = state;
       }
       const auto job = jobs_.running_job();
@@ -93,7 +98,7 @@ class MachineMonitor {
 
   MachineLink& machine_;
   JobManager& jobs_;
-  RpcServer& server_;
+  Notify notify_;  // to the subscribers of both servers
   ServiceNotifier& notifier_;
   std::mutex mutex_;
   std::condition_variable wake_;
@@ -101,7 +106,10 @@ class MachineMonitor {
   std::thread thread_;
 };
 
-int serve(const std::filesystem::path& config_file, DaemonConfig config) {
+// The command line's settings over the file's, at start and again on SIGHUP's reading.
+using Overrides = std::function<void(DaemonConfig&)>;
+
+int serve(const std::filesystem::path& config_file, DaemonConfig config, const Overrides& overrides) {
   set_up_logging(config.log_level);
   ServiceNotifier notifier;
   std::filesystem::create_directories(config.state_dir);
@@ -115,19 +123,30 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
 
   asio::io_context io;
   RpcDispatcher dispatcher;
+  DashboardLink dashboard;  // before the servers: their handlers use it until they stop
   std::unique_ptr<RpcServer> server;
-  JobManager jobs(
-      config, machine, models, store,
-      [&server](const std::string& topic, const std::string& method, const nlohmann::json& params) {
-        if (server) server->notify(topic, method, params);
-      },
-      CMMD_VERSION);
+  std::unique_ptr<WebServer> web;  // the dashboard; null with http.enabled false
+  const MachineMonitor::Notify notify = [&server, &web](const std::string& topic, const std::string& method,
+                                                        const nlohmann::json& params) {
+    if (server) server->notify(topic, method, params);
+    if (web) web->notify(topic, method, params);
+  };
+  JobManager jobs(config, machine, models, store, notify, CMMD_VERSION);
   Service service{config, machine, models, jobs, CMMD_VERSION};
   add_service_methods(dispatcher, service);
+  add_dashboard_method(dispatcher, dashboard);
   server = std::make_unique<RpcServer>(io, dispatcher, config.server);
+  if (config.http.enabled)
+    web = std::make_unique<WebServer>(dispatcher, server->tokens(), config.server, config.http, config.state_dir / "jobs");
   server->start();
+  if (web) {
+    const std::string token = set_up_dashboard_token(server->tokens(), config.state_dir / "dashboard.token");
+    web->start();
+    dashboard.set(dashboard_url(config.server.tcp_bind, web->port(), token));
+    spdlog::info("dashboard: {}", *dashboard.url());
+  }
   jobs.start();
-  MachineMonitor monitor(machine, jobs, *server, notifier);
+  MachineMonitor monitor(machine, jobs, notify, notifier);
 
   asio::signal_set signals(io, SIGINT, SIGTERM, SIGHUP);
   std::thread stopper;
@@ -136,7 +155,8 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
     if (signal == SIGHUP) {
       notifier.reloading();
       try {
-        const DaemonConfig next = read_daemon_config(config_file);
+        DaemonConfig next = read_daemon_config(config_file);
+        overrides(next);
         for (const std::string& part : changes_needing_restart(config, next))
           spdlog::warn("SIGHUP: {} changed; it takes effect after a restart", part);
         spdlog::set_level(spdlog::level::from_str(next.log_level));
@@ -169,6 +189,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
       }
       asio::post(io, [&] {
         server->stop();
+        if (web) web->stop();
         io.stop();
       });
     });
@@ -179,6 +200,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config) {
   const nlohmann::json ready = {{"ready", true},
                                 {"tcp", config.server.tcp_enabled ? nlohmann::json(server->tcp_port()) : nlohmann::json(nullptr)},
                                 {"unix", config.server.unix_path},
+                                {"http", web ? nlohmann::json(web->port()) : nlohmann::json(nullptr)},
                                 {"state_dir", config.state_dir.string()},
                                 {"driver", config.driver}};
   std::cout << ready.dump() << std::endl;
@@ -200,25 +222,31 @@ int main(int argc, char** argv) {
   CLI::App app{"cmmd: control daemon for coordinate measuring machines (docs/api.md)"};
   std::string config_file = "/etc/cmmd/cmmd.json";
   std::string state_dir, runtime_dir;
-  int tcp_port = -1;
+  int tcp_port = -1, http_port = -1;
   bool check = false;
   app.add_option("-c,--config", config_file, "cmmd.json to read");
   app.add_option("--state-dir", state_dir, "state folder (overrides the config and $STATE_DIRECTORY)");
   app.add_option("--runtime-dir", runtime_dir, "folder of the Unix socket (overrides the config and $RUNTIME_DIRECTORY)");
   app.add_option("--tcp-port", tcp_port, "TCP port (0: any free one, printed in the ready line)")->check(CLI::Range(0, 65535));
+  app.add_option("--http-port", http_port, "the dashboard's HTTP port (0: any free one, printed in the ready line)")
+      ->check(CLI::Range(0, 65535));
   app.add_flag("--check", check, "validate the config and exit");
   app.set_version_flag("--version", std::string("cmmd ") + CMMD_VERSION);
   CLI11_PARSE(app, argc, argv);
   try {
     if (!state_dir.empty()) setenv("STATE_DIRECTORY", state_dir.c_str(), 1);
     if (!runtime_dir.empty()) setenv("RUNTIME_DIRECTORY", runtime_dir.c_str(), 1);
+    const Overrides overrides = [&](DaemonConfig& c) {
+      if (tcp_port >= 0) c.server.tcp_port = tcp_port;
+      if (http_port >= 0) c.http.port = http_port;
+    };
     DaemonConfig config = read_daemon_config(config_file);
-    if (tcp_port >= 0) config.server.tcp_port = tcp_port;
+    overrides(config);
     if (check) {
       std::cout << config_file << ": valid\n";
       return 0;
     }
-    return serve(std::filesystem::absolute(config_file), std::move(config));
+    return serve(std::filesystem::absolute(config_file), std::move(config), overrides);
   } catch (const description::FieldError& e) {
     std::cerr << "cmmd: " << e.what() << "\n";
     return 2;

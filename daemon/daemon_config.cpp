@@ -4,10 +4,14 @@
 
 #include <cstdlib>
 
+#include <unistd.h>
+
 #include <asio/ip/address.hpp>
 
 #include "daemon/driver_factory.hpp"
+#include "daemon/static_files.hpp"
 #include "hal/description/json_fields.hpp"
+#include "planner/tolerances_json.hpp"
 
 namespace cmm::daemon {
 
@@ -76,7 +80,38 @@ void read_server(description::JsonFields& b, DaemonConfig& c) {
   b.finish();
 }
 
+// The dashboard's server listens on server.tcp_bind: the same loopback rule holds for it.
+void read_http(description::JsonFields& b, DaemonConfig& c, const std::filesystem::path& base_dir) {
+  HttpOptions& h = c.http;
+  h.enabled = b.flag("enabled", h.enabled);
+  h.port = b.integer("port", h.port, 0, 65535);
+  h.allowed_origins.clear();
+  for (description::JsonFields origin : b.items("allowed_origins")) {
+    const std::string text = origin.as_text("");
+    const std::size_t scheme = text.find("://");
+    const std::string_view rest = scheme == std::string::npos ? std::string_view() : std::string_view(text).substr(scheme + 3);
+    if ((!text.starts_with("http://") && !text.starts_with("https://")) || rest.empty() ||
+        rest.find('/') != std::string_view::npos)
+      origin.problem("must be an origin such as \"http://station.example:7621\" (scheme, host, port; no path)");
+    h.allowed_origins.push_back(text);
+  }
+  const std::string root = b.text("web_root", "");
+  h.web_root = root.empty() ? default_web_root() : description::resolve_config_path(root, base_dir);
+  asio::error_code not_an_address;
+  const asio::ip::address address = asio::ip::make_address(c.server.tcp_bind, not_an_address);
+  if (h.enabled && c.server.tokens.empty() && !not_an_address && !address.is_loopback())
+    b.problem("enabled", "the dashboard would listen on server.tcp_bind \"" + c.server.tcp_bind + "\", not a loopback " +
+                             "address, and no server.tokens are set; set tokens, bind 127.0.0.1 or disable it");
+  b.finish();
+}
+
 }  // namespace
+
+std::string default_station_name() {
+  char name[256] = {};
+  if (gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "cmmd";
+  return name;
+}
 
 DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string& source,
                                      const std::filesystem::path& base_dir) {
@@ -91,6 +126,10 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string&
       from_environment("RUNTIME_DIRECTORY", description::resolve_config_path(block.text("runtime_dir", "/run/cmmd"), base_dir));
   c.models_dir = description::resolve_config_path(block.text("models_dir", ""), base_dir);
   read_server(server, c);
+  {
+    description::JsonFields http = block.object("http");
+    read_http(http, c, base_dir);
+  }
   {
     description::JsonFields log = block.object("log");
     c.log_level = log.text("level", "info", {"trace", "debug", "info", "warn", "error", "critical", "off"});
@@ -133,6 +172,22 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string&
     c.job.trigger_sigma_mm = job.number("trigger_sigma_mm", c.job.trigger_sigma_mm, 0, 1);
     job.finish();
   }
+  {
+    description::JsonFields jog = block.object("jog");
+    c.jog.max_speed_mm_s = jog.number("max_speed_mm_s", c.jog.max_speed_mm_s, 0.01, 1000);
+    if (c.jog.max_speed_mm_s > c.description.max_speed_mm_s)
+      jog.problem("max_speed_mm_s", std::string("must not exceed the machine's max_speed_mm_s (")
+                                        .append(nlohmann::json(c.description.max_speed_mm_s).dump())
+                                        .append(")"));
+    c.jog.segment_s = jog.number("segment_s", c.jog.segment_s, 0.01, 1);
+    jog.finish();
+  }
+  if (block.has("tolerances")) {
+    description::JsonFields tolerances = block.object("tolerances");
+    c.tolerances = planner::read_tolerances(tolerances, c.tolerances);
+  }
+  // "" (or absent) is the host's name: one config file can serve every station of a fleet.
+  if (const std::string station = block.text("station", ""); !station.empty()) c.station = station;
   block.finish();
   block.throw_if_problems(source);
   return c;
@@ -148,10 +203,15 @@ std::vector<std::string> changes_needing_restart(const DaemonConfig& running, co
   ServerOptions a = running.server, b = next.server;
   a.tokens.clear(), b.tokens.clear();
   if (a != b) changed.push_back("server (other than tokens)");
+  if (running.http != next.http) changed.push_back("http");
   if (running.job.delta_mm != next.job.delta_mm || running.job.spacing_mm != next.job.spacing_mm ||
       running.job.feature_angle_deg != next.job.feature_angle_deg ||
       running.job.trigger_sigma_mm != next.job.trigger_sigma_mm)
     changed.push_back("job");
+  if (running.jog.max_speed_mm_s != next.jog.max_speed_mm_s || running.jog.segment_s != next.jog.segment_s)
+    changed.push_back("jog");
+  if (running.tolerances != next.tolerances) changed.push_back("tolerances");
+  if (running.station != next.station) changed.push_back("station");
   if (running.state_dir != next.state_dir) changed.push_back("state_dir");
   if (running.runtime_dir != next.runtime_dir) changed.push_back("runtime_dir");
   if (running.models_dir != next.models_dir) changed.push_back("models_dir");

@@ -8,9 +8,11 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/driver_factory.hpp"
+#include "daemon/http_options.hpp"
 #include "daemon/rpc_server.hpp"
 #include "hal/description/machine_description.hpp"
 #include "hal/description/plate.hpp"
+#include "planner/inspection.hpp"
 
 namespace cmm::daemon {
 
@@ -22,9 +24,19 @@ struct JobDefaults {
   double trigger_sigma_mm = 0.001;  // 1-σ of a trigger centre, for the uncertainties in the result
 };
 
+// How far an operator's jog may go at once (daemon/machine_jog.hpp): the fastest a jog moves, and
+// the longest one guarded segment of it runs, which bounds how late a release or a stop takes effect.
+struct JogOptions {
+  double max_speed_mm_s = 5;
+  double segment_s = 0.1;
+};
+
+std::string default_station_name();  // the host name, or "cmmd" when it has none
+
 struct DaemonConfig {
   std::filesystem::path source;       // the file read ("<defaults>" without one)
   ServerOptions server;               // unix_path resolved against runtime_dir
+  HttpOptions http;                   // the dashboard; web_root resolved (default_web_root when unset)
   std::filesystem::path state_dir;    // models/, jobs/; $STATE_DIRECTORY overrides
   std::filesystem::path runtime_dir;  // the Unix socket; $RUNTIME_DIRECTORY overrides
   std::filesystem::path models_dir;   // read-only folder a job may name as "file:<name>"; empty: none
@@ -34,6 +46,10 @@ struct DaemonConfig {
   description::MachineDescription description;  // what jobs are planned for (tips' radii from the machine)
   description::Plate plate;               // the base plate jobs register by
   JobDefaults job;
+  JogOptions jog;
+  planner::Tolerances tolerances;  // a job's, where its request gives none (planner/tolerances_json.hpp)
+  // This station's name in reports and QIF files (and, later, on a fleet's broker); default the host's name.
+  std::string station = default_station_name();
 };
 
 // Reads `file`; relative paths in it resolve against its folder. Throws description::FieldError

@@ -8,6 +8,7 @@
 #include "hal/description/eigen_json.hpp"
 #include "daemon/client/rpc_error.hpp"
 #include "daemon/storage_error.hpp"
+#include "planner/tolerances_json.hpp"
 #include "hal/utc_time.hpp"
 
 namespace cmm::daemon {
@@ -28,10 +29,29 @@ nlohmann::json normalized(nlohmann::json params, const JobRequest& r) {
   params["feature_angle_deg"] = r.feature_angle_deg;
   params["seed"] = r.seed;
   params["requalify"] = r.requalify;
+  params["tolerances"] = planner::to_json(r.tolerances);
   nlohmann::json& reg = params["registration"];
   if (reg.contains("measure_plate")) reg["measure_plate"]["plate"] = description::to_json(r.plate);
   else reg["plate"] = description::to_json(r.plate);
   return params;
+}
+
+// The inspection's verdict and counts from the job's result.json, for the record (job.list shows it
+// without every client reading every result).
+nlohmann::json verdict_of(const JobStore& store, int id) {
+  try {
+    const std::optional<std::string> text = store.read(id, JobFile::result);
+    if (!text) return nullptr;
+    const nlohmann::json result = nlohmann::json::parse(*text);
+    const nlohmann::json& inspection = result.at("inspection");
+    if (inspection.is_null()) return nullptr;
+    return {{"verdict", inspection.at("verdict")},
+            {"edge_points", inspection.at("counts").at("edge_points")},
+            {"holes", inspection.at("counts").at("holes")}};
+  } catch (const std::exception& e) {
+    spdlog::warn("job {}: no verdict for its record: {}", id, e.what());
+    return nullptr;
+  }
 }
 
 std::string describe_current_exception() {
@@ -109,6 +129,7 @@ void JobManager::set_state(Job& job, JobState state, const std::string& reason, 
   next.fault = fault;
   next.updated = hal::utc_now();
   if (!is_running(state)) next.progress.eta_s = 0;
+  next.verdict = state == JobState::done ? verdict_of(store_, job.record.id) : nlohmann::json(nullptr);
   try {
     store_.save(next);
   } catch (const std::exception& e) {
@@ -209,6 +230,7 @@ void JobManager::worker() {
 nlohmann::json JobManager::submit(const nlohmann::json& params) {
   const JobRequest request = parse_job_request(params, config_);
   models_.resolve(request.model);  // refuse an unknown model now, not when the job comes up
+  if (request.nominal) models_.resolve(request.nominal->model);
   std::lock_guard lock(mutex_);
   if (stopping_) throw RpcError(rpc_code::shutting_down, "cmmd is stopping");
   auto job = std::make_unique<Job>();
@@ -289,7 +311,17 @@ nlohmann::json JobManager::result(int id, const std::string& format) const {
     if (!csv) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.csv");
     return {{"csv", *csv}, {"holes_csv", store_.read(id, JobFile::holes_csv).value_or("")}};
   }
-  if (format != "json") throw_invalid_param("/format", "must be json or csv");
+  if (format == "qif") {
+    const std::optional<std::string> qif = store_.read(id, JobFile::result_qif);
+    if (!qif) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.qif (done before cmmd wrote QIF)");
+    return {{"qif", *qif}};
+  }
+  if (format == "html") {
+    const std::optional<std::string> html = store_.read(id, JobFile::report);
+    if (!html) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no report.html (done before cmmd wrote reports)");
+    return {{"html", *html}};
+  }
+  if (format != "json") throw_invalid_param("/format", "must be json, csv, qif or html");
   const std::optional<std::string> text = store_.read(id, JobFile::result);
   if (!text) throw RpcError(rpc_code::not_found, "job " + std::to_string(id) + " has no result.json");
   return nlohmann::json::parse(*text);

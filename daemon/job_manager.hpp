@@ -46,6 +46,8 @@ class JobManager {
   // machine.stop / machine.abort were called: a running job pauses ("operator stop").
   void machine_stopped();
   std::optional<int> running_job() const;
+  // The job folders, for the readers of a job's files (job.view).
+  const JobStore& store() const { return store_; }
 
  private:
   struct Job {

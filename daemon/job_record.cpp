@@ -24,7 +24,7 @@ void from_json(const nlohmann::json& j, JobFault& f) {
 void to_json(nlohmann::json& j, const JobRecord& r) {
   j = {{"id", r.id},           {"name", r.name},       {"state", to_string(r.state)},
        {"reason", r.reason},   {"model", r.model},     {"created", r.created},
-       {"updated", r.updated}, {"progress", r.progress}, {"fault", nullptr}};
+       {"updated", r.updated}, {"progress", r.progress}, {"fault", nullptr}, {"verdict", r.verdict}};
   if (r.fault) j["fault"] = *r.fault;
 }
 
@@ -39,6 +39,7 @@ void from_json(const nlohmann::json& j, JobRecord& r) {
   j.at("progress").get_to(r.progress);
   const auto& fault = j.at("fault");
   r.fault = fault.is_null() ? std::nullopt : std::optional<JobFault>(fault.get<JobFault>());
+  r.verdict = j.value("verdict", nlohmann::json(nullptr));  // records from before verdicts have none
 }
 
 }  // namespace cmm::daemon

@@ -33,6 +33,9 @@ struct JobRecord {
   std::string created, updated;  // ISO 8601 UTC
   JobProgress progress;
   std::optional<JobFault> fault;
+  // A done job's inspection verdict: {"verdict", "edge_points": counts, "holes": counts}; null when it
+  // named no nominal (or is not done).
+  nlohmann::json verdict = nullptr;
   nlohmann::json request;  // the job.submit params; not part of the record's JSON
 };
 

@@ -6,6 +6,7 @@
 
 #include "daemon/client/rpc_error.hpp"
 #include "hal/description/json_fields.hpp"
+#include "planner/tolerances_json.hpp"
 
 namespace cmm::daemon {
 
@@ -74,7 +75,7 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   };
   if (!f.expect_object()) refuse_if_problems();
   f.known({"model", "name", "scale", "delta_mm", "spacing_mm", "feature_angle_deg", "tolerance_mm", "bin_size_mm",
-           "adaptive", "seed", "requalify", "registration"});
+           "adaptive", "seed", "requalify", "registration", "nominal", "tolerances"});
   if (f.require("model", "\"sha256:<hex>\" or \"file:<name>\"")) {
     r.model = f.text("model", "");
     if (params["model"].is_string() && r.model.rfind("sha256:", 0) != 0 && r.model.rfind("file:", 0) != 0)
@@ -94,6 +95,23 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   r.adaptive = f.flag("adaptive", false);
   r.seed = static_cast<std::uint64_t>(f.number("seed", 1, 0, 9007199254740992.0));
   r.requalify = f.flag("requalify", false);
+  if (f.has("nominal")) {
+    JsonFields nominal = f.object("nominal");
+    if (nominal.value().is_object()) {
+      NominalRequest n;
+      if (nominal.require("model", "\"sha256:<hex>\" or \"file:<name>\"")) {
+        n.model = nominal.text("model", "");
+        if (n.model.rfind("sha256:", 0) != 0 && n.model.rfind("file:", 0) != 0)
+          nominal.problem("model", "must be \"sha256:<hex>\" or \"file:<name>\"");
+      }
+      n.scale = nominal.number("scale", 1, 1e-4, 1e4);
+      n.placement = nominal.text("placement", "given", {"given", "fit"});
+      nominal.finish();
+      r.nominal = n;
+    }
+  }
+  JsonFields tolerances = f.object("tolerances");
+  r.tolerances = planner::read_tolerances(tolerances, config.tolerances);
   r.plate = config.plate;
   if (!(registration_optional && !f.has("registration")) &&
       f.require("registration", "{\"corners\": [...]} or {\"measure_plate\": {...}}")) {

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/daemon_config.hpp"
+#include "planner/inspection.hpp"
 #include "planner/registration.hpp"
 
 namespace cmm::daemon {
@@ -19,6 +20,14 @@ struct PlateMeasurement {
   std::vector<int> ids;                  // 1-based plate corner ids
   std::vector<planner::Vec3> scan;       // S, parallel to ids
   std::vector<planner::Vec3> rough_machine;  // M, a few mm is good enough; parallel to ids
+};
+
+// The model the part should be (a CAD export), which verdicts are given against: in the reference's
+// frame S as it is ("given"), or best-fitted onto the reference by point-to-plane ICP ("fit").
+struct NominalRequest {
+  std::string model;  // "sha256:…" or "file:…", as `model`
+  double scale = 1;
+  std::string placement = "given";
 };
 
 struct JobRequest {
@@ -40,6 +49,8 @@ struct JobRequest {
   // the job qualifies the tip itself and goes on; false (the default), it pauses for the operator.
   bool requalify = false;
   description::Plate plate;
+  std::optional<NominalRequest> nominal;  // none: deviations against the scan only, no verdicts
+  planner::Tolerances tolerances;         // the config's, overridden field by field by the request's
   // Exactly one of these: corner pairs given, or the plate measured on the machine.
   std::optional<planner::RegistrationInput> given;
   std::optional<PlateMeasurement> measure;

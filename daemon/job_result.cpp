@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "daemon/client/sha256.hpp"
+#include "daemon/job_documents.hpp"
+#include "daemon/job_inspection.hpp"
 #include "planner/measured_cloud.hpp"
 #include "planner/plan_compensation.hpp"
 #include "planner/result_csv.hpp"
@@ -130,8 +132,19 @@ std::string write_job_result(JobStore& store, int job_id, const JobResultInputs&
   const double radius = in.machine.tip().ball_radius_mm;
   const std::map<int, planner::TouchOutcome> outcomes =
       touches_at_radius(in.plan.program.touches, in.touches, in.touch_qualification, in.qualifications, radius);
-  const planner::MeasurementResult result = planner::compensate_plan(
+  planner::MeasurementResult result = planner::compensate_plan(
       in.model.features, in.plan, in.registration.T_M_S, outcomes, {radius, in.config.job.trigger_sigma_mm});
+  // A nominal that cannot be read or placed costs the verdicts, never the measurements: the result is
+  // written without them and says why.
+  std::string inspection_problem;
+  if (in.models && in.request.nominal) {
+    try {
+      result.inspection = inspect_job(in.request, *in.models, in.model, result);
+    } catch (const std::exception& e) {
+      inspection_problem = e.what();
+      result.notes.push_back(std::string("no verdicts: ").append(e.what()));
+    }
+  }
 
   nlohmann::json j = planner::to_json(result);
   for (std::string& note : qualification_notes(in, radius)) j["notes"].push_back(std::move(note));
@@ -146,12 +159,19 @@ std::string write_job_result(JobStore& store, int job_id, const JobResultInputs&
   j["traceability"] = traceability(in, radius);
   j["files"] = {{"csv", file_name(JobFile::result_csv)},          {"holes_csv", file_name(JobFile::holes_csv)},
                 {"merged_cloud", file_name(JobFile::merged_cloud)}, {"plan", file_name(JobFile::plan)},
-                {"touches", file_name(JobFile::touches)}};
+                {"touches", file_name(JobFile::touches)}, {"qif", file_name(JobFile::result_qif)},
+                {"report", file_name(JobFile::report)}};
   store.write(job_id, JobFile::result_csv, planner::to_csv(result));
   store.write(job_id, JobFile::holes_csv, planner::holes_to_csv(result));
   geometry::Points scan_points = in.model.mesh.vertices;
   planner::write_merged_ply(store.path(job_id, JobFile::merged_cloud), scan_points,
                             planner::measured_points_in_scan(result), in.request.delta_mm);  // δ bounds a reference point's error
+  try {
+    write_job_documents(store, job_id, in, result);
+  } catch (const std::invalid_argument& e) {
+    // A document that cannot be made (a number QIF cannot hold) costs that document, not the result.
+    j["notes"].push_back(std::string("no report or QIF file: ").append(e.what()));
+  }
   store.write(job_id, JobFile::result, j.dump(1) + "\n");
 
   const planner::ResultSummary& s = result.summary;
@@ -160,7 +180,17 @@ std::string write_job_result(JobStore& store, int job_id, const JobResultInputs&
                 "%d of %d edge points measured (%d failed); deviation RMS %.4f mm, max %.4f mm; %d of %d holes measured",
                 s.edges_measured, s.edge_points, s.edges_failed, s.rms_deviation_mm, s.max_deviation_mm,
                 s.holes_measured, s.holes);
-  return line;
+  std::string summary = line;
+  if (result.inspection) {
+    const planner::InspectionResult& r = *result.inspection;
+    std::snprintf(line, sizeof line, "; verdict %s (%d pass, %d fail, %d undecided)", planner::to_string(r.verdict),
+                  r.edge_counts.pass + r.hole_counts.pass, r.edge_counts.fail + r.hole_counts.fail,
+                  r.edge_counts.undecided + r.hole_counts.undecided);
+    summary += line;
+  } else if (!inspection_problem.empty()) {
+    summary.append("; no verdicts: ").append(inspection_problem);
+  }
+  return summary;
 }
 
 }  // namespace cmm::daemon

@@ -14,6 +14,7 @@
 #include "daemon/job_qualifications.hpp"
 #include "daemon/job_registration.hpp"
 #include "daemon/job_store.hpp"
+#include "daemon/model_store.hpp"
 #include "hal/description/machine_description.hpp"
 #include "hal/motion.hpp"
 #include "planner/plan_compensation.hpp"
@@ -40,6 +41,8 @@ struct JobResultInputs {
   // Where the mesh the job planned on came from (JobReference::provenance); null when not known.
   nlohmann::json reference_mesh = nullptr;
   std::string started_utc, finished_utc;
+  // Where the request's nominal model is read from (null: the job is not held against one).
+  const ModelStore* models = nullptr;
 };
 
 // The touch results as compensation takes them, all for the plan's radius R: a touch made under a

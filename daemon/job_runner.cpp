@@ -71,7 +71,8 @@ void JobRunner::run(bool rehome, bool reregister) {
                                  .version = env_.version,
                                  .reference_mesh = reference_mesh_,
                                  .started_utc = started,
-                                 .finished_utc = hal::utc_now()};
+                                 .finished_utc = hal::utc_now(),
+                                 .models = &env_.models};
     sink_.state(JobState::done, write_job_result(env_.store, id_, inputs), std::nullopt);
   } catch (...) {
     end(ending_of(std::current_exception(), control_));

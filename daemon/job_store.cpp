@@ -140,6 +140,8 @@ const char* file_name(JobFile file) {
     case JobFile::result_csv: return "result.csv";
     case JobFile::holes_csv: return "result.holes.csv";
     case JobFile::merged_cloud: return "merged.ply";
+    case JobFile::result_qif: return "result.qif";
+    case JobFile::report: return "report.html";
   }
   return "?";
 }

@@ -28,6 +28,8 @@ enum class JobFile {
   result_csv,      // result.csv
   holes_csv,       // result.holes.csv
   merged_cloud,    // merged.ply
+  result_qif,      // result.qif: QIF 3.0 results (docs/qif.md)
+  report,          // report.html: the self-contained report (docs/report.md)
 };
 const char* file_name(JobFile file);
 

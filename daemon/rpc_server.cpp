@@ -20,15 +20,6 @@ namespace {
 
 using nlohmann::json;
 
-// Compares without stopping at the first difference, so the time taken does not tell how much
-// of a guessed token was right.
-bool same_secret(const std::string& secret, const std::string& guess) {
-  unsigned diff = secret.size() != guess.size();
-  for (std::size_t i = 0; i < secret.size(); ++i)
-    diff |= static_cast<unsigned char>(secret[i]) ^ static_cast<unsigned char>(i < guess.size() ? guess[i] : 0);
-  return diff == 0;
-}
-
 std::string tcp_peer(const asio::ip::tcp::socket& socket) {
   asio::error_code ec;
   const auto remote = socket.remote_endpoint(ec);
@@ -63,8 +54,7 @@ RpcServer::RpcServer(asio::io_context& io, RpcDispatcher& dispatcher, ServerOpti
       dispatcher_(dispatcher),
       options_(std::move(options)),
       unsent_budget_(options_.max_total_unsent_bytes),
-      tokens_(options_.tokens),
-      auth_throttle_(options_.auth_guesses_per_s, options_.auth_guess_burst) {
+      tokens_(options_.tokens, options_.auth_guesses_per_s, options_.auth_guess_burst) {
   dispatcher_.add("server.auth", {Role::none, Work::quick, [this](const json& p, RpcContext& c) { return auth(p, c); }});
   dispatcher_.add("server.subscribe",
                   {Role::observer, Work::quick, [this](const json& p, RpcContext& c) { return subscribe(p, c); }});
@@ -155,11 +145,7 @@ void RpcServer::accept_tcp() {
     asio::error_code ignored;
     socket.set_option(asio::ip::tcp::no_delay(true), ignored);
     std::string peer = tcp_peer(socket);
-    Role role;
-    {
-      std::lock_guard lock(tokens_mutex_);
-      role = tokens_.empty() ? Role::operator_ : Role::none;
-    }
+    const Role role = tokens_.any_configured() ? Role::none : Role::operator_;
     admit(std::move(socket), std::move(peer), role, true);
     accept_tcp();
   });
@@ -222,10 +208,7 @@ void RpcServer::notify(const std::string& topic, const std::string& method, cons
       asio::post(io_, [session = session, line] { session->send_notification(line); });
 }
 
-void RpcServer::set_tokens(std::vector<AccessToken> tokens) {
-  std::lock_guard lock(tokens_mutex_);
-  tokens_ = std::move(tokens);
-}
+void RpcServer::set_tokens(std::vector<AccessToken> tokens) { tokens_.set_configured(std::move(tokens)); }
 
 std::size_t RpcServer::connection_count() const {
   std::lock_guard lock(sessions_mutex_);
@@ -257,22 +240,14 @@ json RpcServer::auth(const json& params, RpcContext& ctx) {
   const auto token = params.find("token");
   if (!params.is_object() || token == params.end() || !token->is_string())
     throw_invalid_param("/token", "server.auth needs {\"token\": string}");
-  std::optional<Role> granted;
-  {
-    std::lock_guard lock(tokens_mutex_);
-    if (!auth_throttle_.allow()) {
-      // Too many wrong guesses lately, from anyone: not even compared, and logged once.
-      if (!auth_refusing_) spdlog::warn("server.auth: too many failed attempts; refusing server.auth for a while");
-      auth_refusing_ = true;
-      ctx.close_after_reply();
-      throw RpcError(rpc_code::auth_failed, "too many failed server.auth attempts: try again later",
-                     {{"retry_after_s", auth_throttle_.retry_after_s()}});
-    }
-    auth_refusing_ = false;
-    for (const AccessToken& known : tokens_)
-      if (same_secret(known.token, token->get_ref<const std::string&>())) granted = known.role;
-    if (!granted) auth_throttle_.record_failure();
+  const TokenCheck checked = tokens_.check(token->get_ref<const std::string&>());
+  if (checked.throttled) {
+    // Too many wrong guesses lately, from anyone: not even compared (TokenBook logs it once).
+    ctx.close_after_reply();
+    throw RpcError(rpc_code::auth_failed, "too many failed server.auth attempts: try again later",
+                   {{"retry_after_s", checked.retry_after_s}});
   }
+  const std::optional<Role> granted = checked.role;
   if (!granted) {
     const int failures = ctx.count_failed_auth();
     spdlog::warn("connection {} ({}): server.auth with an unknown token ({} on this connection)", ctx.connection_id(),

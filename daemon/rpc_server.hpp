@@ -15,42 +15,13 @@
 #include <asio/local/stream_protocol.hpp>
 #include <nlohmann/json.hpp>
 
-#include "daemon/auth_throttle.hpp"
 #include "daemon/byte_budget.hpp"
 #include "daemon/client/json_rpc.hpp"
+#include "daemon/server_options.hpp"
+#include "daemon/token_book.hpp"
 #include "daemon/worker_pools.hpp"
 
 namespace cmm::daemon {
-
-struct AccessToken {
-  std::string token;
-  Role role = Role::observer;
-  bool operator==(const AccessToken&) const = default;
-};
-
-struct ServerOptions {
-  std::string tcp_bind = "127.0.0.1";       // an address or a host name
-  int tcp_port = 7620;                       // 0: ephemeral (see RpcServer::tcp_port)
-  bool tcp_enabled = true;
-  std::string unix_path;                     // empty: no Unix socket
-  unsigned unix_mode = 0660;
-  std::size_t max_request_bytes = 4u << 20;  // one line, without its newline
-  std::size_t max_batch_entries = 128;       // requests in one batch; more: one batch_too_large error
-  int max_connections = 256;                 // TCP connections
-  int max_unix_connections = 64;             // Unix socket connections, counted apart: cmmctl stop always gets in
-  int max_pending_requests = 64;             // slow requests running or queued, per connection
-  // A partial line then silence this long: closed. A TCP connection that has not subscribed is
-  // also closed when it sends no complete line for this long while it waits for no reply.
-  double idle_timeout_s = 30;
-  double auth_timeout_s = 10;                // with tokens: a TCP connection not authenticated by then is closed
-  double auth_guesses_per_s = 5, auth_guess_burst = 20;  // how fast wrong tokens may come (AuthThrottle)
-  std::vector<AccessToken> tokens;           // empty: TCP is operator, and only loopback binds
-  WorkerCounts workers;                      // the threads of the slow methods
-  std::size_t max_unsent_bytes = 64u << 20;  // a connection further behind in reading than this is dropped
-  std::size_t max_total_unsent_bytes = 256u << 20;  // the same for all connections together
-  std::vector<std::string> topics = {"job", "machine"};  // what server.subscribe accepts
-  bool operator==(const ServerOptions&) const = default;
-};
 
 class RpcSession;
 
@@ -74,6 +45,9 @@ class RpcServer {
   // Thread-safe (SIGHUP): new connections and later server.auth calls use these; roles already
   // granted stay.
   void set_tokens(std::vector<AccessToken> tokens);
+  // What server.auth compares with, shared with the dashboard's server (WebServer), which runs the
+  // same server.auth through the dispatcher and checks its report links' tokens here.
+  TokenBook& tokens() { return tokens_; }
   // On the io thread (or with the io_context not running): closes the listeners and every
   // connection, removes the Unix socket, and joins the workers (after running slow methods return).
   void stop();
@@ -105,10 +79,7 @@ class RpcServer {
   mutable std::mutex sessions_mutex_;
   std::map<std::uint64_t, std::shared_ptr<RpcSession>> sessions_;
   std::size_t tcp_sessions_ = 0, unix_sessions_ = 0;  // admitted, not refused
-  mutable std::mutex tokens_mutex_;
-  std::vector<AccessToken> tokens_;
-  AuthThrottle auth_throttle_;  // under tokens_mutex_ (a batch may run server.auth on a worker)
-  bool auth_refusing_ = false;
+  TokenBook tokens_;
 };
 
 }  // namespace cmm::daemon

@@ -8,6 +8,8 @@
 #include <spdlog/spdlog.h>
 
 #include "hal/description/eigen_json.hpp"
+#include "daemon/job_view.hpp"
+#include "daemon/machine_jog.hpp"
 #include "daemon/plan_preview.hpp"
 #include "daemon/touch_motion.hpp"
 #include "geometry/file_error.hpp"
@@ -66,10 +68,12 @@ nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
   }
 }
 
-void add_machine_methods(RpcDispatcher& d, Service& s) {
-  d.add("machine.status", {Role::observer, Work::blocking, [&s](const nlohmann::json&, RpcContext&) {
+void add_machine_methods(RpcDispatcher& d, Service& s, const std::shared_ptr<MachineJog>& jog) {
+  d.add("machine.status", {Role::observer, Work::blocking, [&s, jog](const nlohmann::json&, RpcContext&) {
           nlohmann::json j = s.machine.status_json();
           if (const auto running = s.jobs.running_job()) j["job"] = *running;
+          j["jog"] = jog->status_json();
+          j["last_jog"] = jog->last_json();
           return j;
         }});
   d.add("machine.home", {Role::operator_, Work::blocking, [&s](const nlohmann::json&, RpcContext&) {
@@ -208,6 +212,16 @@ void add_job_methods(RpcDispatcher& d, Service& s) {
   d.add("job.result", {Role::observer, Work::blocking, [&s](const nlohmann::json& p, RpcContext&) {
           return s.jobs.result(job_id(p), text(p, "format", "json"));
         }});
+  // The job's self-contained HTML report (report.html), for cmmctl report and the dashboard.
+  d.add("job.report", {Role::observer, Work::blocking, [&s](const nlohmann::json& p, RpcContext&) {
+          return s.jobs.result(job_id(p), "html");
+        }});
+  // What the dashboard draws of a job (daemon/job_view.hpp); off the io thread: it reads the job's files.
+  d.add("job.view", {Role::observer, Work::blocking, [&s](const nlohmann::json& p, RpcContext&) {
+          const int id = job_id(p);
+          s.jobs.get(id);  // −32010 for no such job
+          return job_view(s.jobs.store(), id);
+        }});
 }
 
 }  // namespace
@@ -221,7 +235,10 @@ void add_service_methods(RpcDispatcher& dispatcher, Service& service) {
                                          {"driver", service.machine.driver()},
                                          {"methods", dispatcher.methods()}};
                  }});
-  add_machine_methods(dispatcher, service);
+  // machine.jog and machine.jog_stop (daemon/machine_jog.hpp); the jog ends with the dispatcher.
+  const auto jog = std::make_shared<MachineJog>(service.machine, service.config.jog, service.config.description.travel_box);
+  add_jog_methods(dispatcher, jog);
+  add_machine_methods(dispatcher, service, jog);
   add_model_and_plan_methods(dispatcher, service);
   add_job_methods(dispatcher, service);
 }

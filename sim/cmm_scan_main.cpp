@@ -25,7 +25,8 @@ namespace {
 using namespace cmm;
 
 struct Options {
-  std::string part, mesh, cloud, truth, sim_config, plate_corners;
+  std::string part, mesh, cloud, truth, sim_config, plate_corners, nominal;
+  double nominal_chord_mm = 0.001;
   double corner_noise = 0.01, rough_error = 1;
   double edge_length = 1, noise = 0.05, spacing = 0.5, stray_fraction = 0.002;
   double max_incidence_deg = sim::kDefaultMaxIncidenceDeg;
@@ -96,6 +97,15 @@ int scan(Options o) {
       {"view_directions", nlohmann::json::array()}};
   for (const sim::ScanView& view : views) truth["view_directions"].push_back(description::vec3_json(view.direction));
 
+  if (!o.nominal.empty()) {
+    // The part as its CAD system would export it, in S: what an inspection holds the measurements against.
+    const geometry::AnalyticPart cad =
+        geometry::make_analytic_part(o.part, geometry::Tessellation{geometry::Tessellation::Style::cad, 1.0, o.nominal_chord_mm});
+    geometry::write_mesh(o.nominal, cad.mesh);
+    truth["nominal"] = {{"file", o.nominal}, {"faces", cad.mesh.faces.rows()}, {"chord_tolerance_mm", o.nominal_chord_mm}};
+    std::cout << o.nominal << ": nominal " << o.part << " as a CAD export, " << cad.mesh.faces.rows()
+              << " triangles (chords within " << o.nominal_chord_mm << " mm)\n";
+  }
   if (!o.mesh.empty()) {
     const sim::ScannedMesh scanned = sim::synthesize_scanned_mesh(
         part.mesh, {.noise_sigma_mm = o.noise, .views = views, .max_incidence_deg = o.max_incidence_deg, .seed = o.seed});
@@ -161,14 +171,17 @@ int main(int argc, char** argv) {
   app.add_option("--mesh", o.mesh, "scanned reference mesh to write (STL, PLY, OBJ, OFF)");
   app.add_option("--cloud", o.cloud, "raw scan cloud to write (PLY, XYZ)");
   app.add_option("--truth", o.truth, "JSON summary of the truth: options, seed, removed faces");
+  app.add_option("--nominal", o.nominal, "the true part as a CAD export (few large triangles) in S, for inspection");
+  app.add_option("--nominal-chord", o.nominal_chord_mm, "the nominal's largest chord error on curved faces, mm")
+      ->check(CLI::PositiveNumber);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     const int code = app.exit(error);  // prints help, or the error and a hint
     return code == 0 ? 0 : 2;
   }
-  if (o.mesh.empty() && o.cloud.empty() && o.plate_corners.empty()) {
-    std::cerr << "cmm-scan: nothing to write: give --mesh out.ply, --cloud out.ply and/or --plate-corners out.json\n";
+  if (o.mesh.empty() && o.cloud.empty() && o.plate_corners.empty() && o.nominal.empty()) {
+    std::cerr << "cmm-scan: nothing to write: give --mesh out.ply, --cloud out.ply, --nominal out.stl and/or --plate-corners out.json\n";
     return 2;
   }
   try {

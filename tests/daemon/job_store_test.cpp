@@ -54,12 +54,18 @@ TEST(JobRecord, JsonIsTheApiRecordWithoutTheRequest) {
       "model": "sha256:aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa",
       "created": "2026-11-24T12:00:00Z", "updated": "2026-11-24T12:05:00Z",
       "progress": {"phase": "probing", "done": 12, "total": 40, "eta_s": 93.5},
-      "fault": {"kind": "EStop", "message": "e-stop pressed"}})"));
+      "fault": {"kind": "EStop", "message": "e-stop pressed"}, "verdict": null})"));
   const auto back = j.get<JobRecord>();
   EXPECT_EQ(nlohmann::json(back), j);
   r.fault.reset();
   EXPECT_TRUE(nlohmann::json(r).at("fault").is_null());
   EXPECT_FALSE(nlohmann::json(r).get<JobRecord>().fault.has_value());
+  // A done job's verdict goes with the record; a record from before verdicts reads as none.
+  r.verdict = {{"verdict", "fail"}, {"edge_points", {{"pass", 3}, {"fail", 1}}}, {"holes", {{"pass", 1}}}};
+  EXPECT_EQ(nlohmann::json(r).get<JobRecord>().verdict, r.verdict);
+  nlohmann::json old = r;
+  old.erase("verdict");
+  EXPECT_TRUE(old.get<JobRecord>().verdict.is_null());
 }
 
 TEST(JobStore, CreatedAndSavedJobsComeBackOnRecover) {

@@ -41,7 +41,8 @@ CmmdInstance::~CmmdInstance() = default;
 
 void CmmdInstance::start(const std::vector<std::string>& launcher, bool read_log) {
   std::vector<std::string> argv = launcher;
-  argv.insert(argv.end(), {CMMD_BINARY_DIR "/daemon/cmmd", "--config", (folder_ / "cmmd.json").string()});
+  // Tests run side by side: the dashboard's default port (7621) would be taken by the first.
+  argv.insert(argv.end(), {CMMD_BINARY_DIR "/daemon/cmmd", "--config", (folder_ / "cmmd.json").string(), "--http-port", "0"});
   process_ = std::make_unique<ChildProcess>(argv, read_log);
   // With the log on the pipe, a restart's warnings (an interrupted job) come before the ready line.
   std::string line = process_->read_line(60);
@@ -49,6 +50,7 @@ void CmmdInstance::start(const std::vector<std::string>& launcher, bool read_log
   const nlohmann::json ready = nlohmann::json::parse(line);
   if (!ready.value("ready", false)) throw std::runtime_error("cmmd: " + ready.dump());
   tcp_port_ = ready["tcp"].is_number() ? ready["tcp"].get<int>() : 0;
+  http_port_ = ready.value("http", nlohmann::json(nullptr)).is_number() ? ready["http"].get<int>() : 0;
 }
 
 void CmmdInstance::kill9() {

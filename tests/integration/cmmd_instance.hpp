@@ -22,8 +22,9 @@ class CmmdInstance {
   CmmdInstance(std::filesystem::path folder, nlohmann::json machine, nlohmann::json extra = nlohmann::json::object());
   ~CmmdInstance();
 
-  // Spawns cmmd and waits for its ready line. `launcher` goes before cmmd's own command line (e.g.
-  // a shell that sets the environment and execs it, so cmmd keeps the pid the test knows).
+  // Spawns cmmd (its dashboard on an ephemeral port: --http-port 0) and waits for its ready line.
+  // `launcher` goes before cmmd's own command line (e.g. a shell that sets the environment and
+  // execs it, so cmmd keeps the pid the test knows).
   // read_log: cmmd's log (stderr) comes through process().read_line after the ready line.
   void start(const std::vector<std::string>& launcher = {}, bool read_log = false);
   void kill9();             // SIGKILL, reaped
@@ -34,6 +35,7 @@ class CmmdInstance {
   daemon::RpcClient client() const;      // over the Unix socket (operator)
   daemon::RpcClient tcp_client() const;  // over TCP
   int tcp_port() const { return tcp_port_; }
+  int http_port() const { return http_port_; }  // the dashboard's; 0 when http.enabled is false
   const std::filesystem::path& folder() const { return folder_; }
   std::filesystem::path job_folder(int id) const;
   const nlohmann::json& config() const { return config_; }
@@ -43,6 +45,7 @@ class CmmdInstance {
   nlohmann::json config_;
   std::unique_ptr<ChildProcess> process_;
   int tcp_port_ = 0;
+  int http_port_ = 0;
 };
 
 // Uploads a file and submits a job on it; returns the job id.

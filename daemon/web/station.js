@@ -1,0 +1,188 @@
+// The station page: the machine's state as machine.status gives it (polled twice a second, and at
+// once on a machine.state notification), Home, Reset and Qualify, jogging, and taking the ball's
+// position as a rough plate corner for the submit form. STOP lives in the header, always in view.
+import {$, fmt, fmt_vec, attempt, show_message} from './ui.js';
+import {describe_error} from './rpc.js';
+
+let ctx = null;
+let last_status = null;
+let polling = false;
+let qualification = null;  // the tip's last qualification this page knows of
+
+const POLL_MS = 500;
+const JOG_RESEND_MS = 150;
+
+export function init(context) {
+  ctx = context;
+  ctx.rpc.on('machine.state', (p) => {
+    if (last_status) render({...last_status, ...p});
+    poll_once();
+  });
+  ctx.rpc.on_open((role) => {
+    if (role !== 'none') load_qualification();
+    if (!polling) poll();
+  });
+  $('home').addEventListener('click', () => machine_call('machine.home', 600));
+  $('reset').addEventListener('click', () => machine_call('machine.reset', 60));
+  $('qualify').addEventListener('click', async () => {
+    const q = await machine_call('machine.qualify', 900);
+    if (q) {
+      qualification = q;
+      render_tip();
+    }
+  });
+  $('stop').addEventListener('click', () => {
+    stop_jog(false);
+    attempt('STOP', () => ctx.rpc.call('machine.stop', {}, 10)).then((r) => {
+      if (r) show_message('machine stopped', 'note');
+    });
+  });
+  for (const b of document.querySelectorAll('[data-jog]')) set_up_jog_button(b);
+  window.addEventListener('blur', () => stop_jog());  // a release the page never hears
+  $('take-corner').addEventListener('click', () => {
+    if (!last_status || !Array.isArray(last_status.position)) {
+      show_message('no machine position yet');
+      return;
+    }
+    const id = Number($('corner-id').value);
+    ctx.take_corner(id, last_status.position);
+    show_message(`plate corner ${id}: rough machine position ${fmt_vec(last_status.position, 2)} taken into the submit form`, 'note');
+  });
+}
+
+async function machine_call(method, timeout_s) {
+  const r = await attempt(method, () => ctx.rpc.call(method, {}, timeout_s));
+  poll_once();
+  return r;
+}
+
+// The tip's qualification, until this page qualifies it: as the last job that finished recorded it.
+async function load_qualification() {
+  try {
+    const jobs = (await ctx.rpc.call('job.list')).jobs.filter((j) => j.state === 'done');
+    if (!jobs.length || qualification) return;
+    const result = await ctx.rpc.call('job.result', {job: jobs[jobs.length - 1].id}, 60);
+    const tip = result.traceability && result.traceability.tip;
+    if (tip && tip.qualification && !qualification) qualification = {tip: tip.id, from_job: result.job, ...tip.qualification};
+    render_tip();
+  } catch (e) {
+    // Nothing to show: the tip's line says "not known".
+  }
+}
+
+function poll() {
+  polling = true;
+  const next = () => setTimeout(poll, POLL_MS);
+  if (!ctx.rpc.connected || ctx.rpc.role === 'none') {
+    next();
+    return;
+  }
+  ctx.rpc.call('machine.status', {}, 10).then(render, () => {}).finally(next);
+}
+
+function poll_once() {
+  if (ctx.rpc.connected && ctx.rpc.role !== 'none') ctx.rpc.call('machine.status', {}, 10).then(render, () => {});
+}
+
+function yes_no(b) { return b === undefined || b === null ? '–' : b ? 'yes' : 'no'; }
+
+function render(s) {
+  last_status = s;
+  const set = (id, text, cls) => {
+    const e = $(id);
+    e.textContent = text;
+    if (cls !== undefined) e.className = cls;
+  };
+  set('m-lifecycle', s.lifecycle || '–');
+  set('m-link', s.link || '–', s.link === 'up' ? 'good' : 'bad');
+  set('m-homed', yes_no(s.homed), s.homed ? 'good' : 'warn');
+  set('m-moving', yes_no(s.moving));
+  set('m-estop', s.estop ? 'PRESSED' : 'released', s.estop ? 'bad' : 'good');
+  set('m-aborted', yes_no(s.aborted), s.aborted ? 'bad' : '');
+  set('m-fault', s.fault ? `${s.fault.kind}: ${s.fault.message}` : 'none', s.fault ? 'bad' : 'good');
+  set('m-job', s.job === null || s.job === undefined ? 'none' : `job ${s.job}`);
+  if (Array.isArray(s.position)) {
+    set('m-x', fmt(s.position[0], 3));
+    set('m-y', fmt(s.position[1], 3));
+    set('m-z', fmt(s.position[2], 3));
+  }
+  set('m-jog', s.jog ? `jogging ${fmt_vec(s.jog.direction, 0)} at ${fmt(s.jog.speed_mm_s, 1)} mm/s`
+                     : s.last_jog ? `last jog: ${s.last_jog.reason}` : '–');
+  render_tip();
+  // The header's summary, on every page.
+  const summary = s.link !== 'up' ? `machine ${s.link || 'unknown'}` : s.estop ? 'E-STOP' : s.fault ? `fault: ${s.fault.kind}`
+                : s.job !== null && s.job !== undefined ? `running job ${s.job}` : s.moving ? 'moving' : s.homed ? 'idle' : 'not homed';
+  const pill = $('hdr-machine');
+  pill.textContent = summary;
+  pill.className = `pill ${s.link !== 'up' || s.estop || s.fault ? 'bad' : s.homed ? 'good' : 'warn'}`;
+}
+
+function render_tip() {
+  const tip = last_status ? last_status.tip : null;
+  $('m-tip').textContent = tip || '–';
+  const q = qualification && (!tip || qualification.tip === tip) ? qualification : null;
+  $('m-qualification').textContent = q
+    ? `r ${fmt(q.ball_radius_mm, 4)} mm, residual RMS ${fmt(q.residual_rms_mm, 4)} mm, ${q.time_utc}${q.from_job ? ` (as job ${q.from_job} recorded it)` : ''}`
+    : 'not known to this page (Qualify measures it)';
+}
+
+// --- jogging: a continuous jog is renewed every 150 ms while its button is held, and stopped on release.
+
+let jog = null;  // {direction, timer}
+
+function jog_params(direction) {
+  const p = {direction, speed_mm_s: Number($('jog-speed').value)};
+  const step = $('jog-step').value;
+  if (step !== 'hold') p.distance_mm = Number(step);
+  else p.hold_s = 0.4;  // renewed every 150 ms; a lost page stops it within 0.4 s
+  return p;
+}
+
+function send_jog(direction) {
+  return ctx.rpc.call('machine.jog', jog_params(direction), 10).catch((e) => {
+    stop_jog(false);
+    show_message(`machine.jog: ${describe_error(e)}`);
+  });
+}
+
+function start_jog(direction) {
+  if ($('jog-step').value !== 'hold') {
+    send_jog(direction);
+    return;
+  }
+  stop_jog(false);
+  jog = {direction, timer: setInterval(() => send_jog(direction), JOG_RESEND_MS)};
+  send_jog(direction);
+}
+
+function stop_jog(tell_machine = true) {
+  if (!jog) return;
+  clearInterval(jog.timer);
+  jog = null;
+  if (tell_machine) attempt('machine.jog_stop', () => ctx.rpc.call('machine.jog_stop', {}, 10)).then(poll_once);
+}
+
+function set_up_jog_button(b) {
+  const axis = {x: 0, y: 1, z: 2}[b.dataset.jog[1]];
+  const direction = [0, 0, 0];
+  direction[axis] = b.dataset.jog[0] === '-' ? -1 : 1;
+  b.addEventListener('pointerdown', (e) => {
+    if (e.button !== 0 || b.disabled) return;
+    b.setPointerCapture(e.pointerId);
+    start_jog(direction);
+  });
+  for (const type of ['pointerup', 'pointercancel', 'lostpointercapture']) b.addEventListener(type, () => stop_jog());
+  b.addEventListener('keydown', (e) => {
+    if ((e.key === ' ' || e.key === 'Enter') && !e.repeat) start_jog(direction);
+  });
+  b.addEventListener('keyup', (e) => {
+    if (e.key === ' ' || e.key === 'Enter') stop_jog();
+  });
+}
+
+export function position() { return last_status ? last_status.position : null; }
+export function show() { poll_once(); }
+export function hide() { stop_jog(); }
+
+// The station's rows as plain text, for the tests.
+export function snapshot() { return last_status; }
