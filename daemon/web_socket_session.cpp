@@ -4,6 +4,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <utility>
@@ -49,7 +50,10 @@ void WebSocketSession::start(Request upgrade) {
   timeouts.keep_alive_pings = true;
   ws_.set_option(timeouts);
   ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& r) { r.set(beast::http::field::server, "cmmd"); }));
-  ws_.read_message_max(limits_.max_request_bytes);
+  // read() keeps the limit, not Beast's read_message_max: over that, Beast 1.74 fails the connection,
+  // and its teardown closes the socket after one read of what the peer is still sending; the reset
+  // loses the 1009 on its way. Our own close reads the rest of the message away first.
+  ws_.read_message_max(0);
   ws_.text(true);
   ws_.async_accept(upgrade, [self = shared_from_this()](const beast::error_code& ec) { self->on_accept(ec); });
 }
@@ -71,25 +75,29 @@ void WebSocketSession::on_accept(const beast::error_code& ec) {
 
 void WebSocketSession::read() {
   reading_ = true;
-  ws_.async_read(inbox_, [self = shared_from_this()](const beast::error_code& ec, std::size_t) { self->on_read(ec); });
+  // In pieces, never more than one byte over the limit: a message over it is known before it is in memory.
+  const std::size_t room = limits_.max_request_bytes + 1 - std::min(inbox_.size(), limits_.max_request_bytes);
+  ws_.async_read_some(inbox_, room,
+                      [self = shared_from_this()](const beast::error_code& ec, std::size_t) { self->on_read(ec); });
 }
 
 void WebSocketSession::on_read(const beast::error_code& ec) {
   reading_ = false;
   if (closed_) return;
   if (ec == websocket::error::closed) return close(closing_ ? close_reason_ : "closed by the peer");
-  if (ec == websocket::error::message_too_big) {
-    // Beast has sent 1009 and closed; the other connections never saw the bytes.
-    spdlog::warn("connection {} ({}): a message over max_request_bytes ({} bytes); closed", context_.connection_id(),
-                 context_.peer(), limits_.max_request_bytes);
-    return close("a message over max_request_bytes");
-  }
   if (ec == beast::error::timeout) return close(std::string("no frame and no pong for idle_timeout_s (").append(seconds_text(limits_.idle_timeout_s)).append(" s)"));
   if (ec) return close("read failed: " + ec.message());
   if (closing_) {  // what the peer sends after our close frame is dropped until its close frame comes
     inbox_.consume(inbox_.size());
     return read();
   }
+  if (inbox_.size() > limits_.max_request_bytes) {  // the other connections never see the bytes
+    spdlog::warn("connection {} ({}): a message over max_request_bytes ({} bytes); closing", context_.connection_id(),
+                 context_.peer(), limits_.max_request_bytes);
+    inbox_.consume(inbox_.size());
+    return finish_after_output("a message over max_request_bytes", websocket::close_code::too_big);
+  }
+  if (!ws_.is_message_done()) return read();
   if (!ws_.got_text()) {
     inbox_.consume(inbox_.size());
     return finish_after_output("a binary message (JSON-RPC goes in text messages)", websocket::close_code::unknown_data);
