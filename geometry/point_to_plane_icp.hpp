@@ -15,6 +15,9 @@ struct IcpOptions {
   // A pair's sample and vertex may be farther apart, up to twice the target's mean edge length.
   double reject_mm = 5.0;
   double min_reject_mm = 0.05;
+  // A pair whose normals differ by more than this is not the same surface: a sample beside a crease
+  // and the crease's vertex, or the two sides of a thin wall.
+  double max_normal_angle_deg = 20;
   // Converged when an iteration moves no sample by more than this.
   double step_mm = 1e-6;
   int samples = 20000;  // taken over the source's area, so a CAD export's few huge facets count by area

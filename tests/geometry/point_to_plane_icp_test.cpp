@@ -25,12 +25,12 @@ TEST(PointToPlaneIcp, RecoversAMovedCaseThreeBlock) {
   const TriangleMesh target = moved(fine.mesh, truth);
   const IcpResult fit = point_to_plane_icp(cad.mesh, target);
   ASSERT_TRUE(fit.converged) << fit.iterations << " iterations, RMS " << fit.rms_mm;
-  EXPECT_LT(fit.rms_mm, 0.005);
+  EXPECT_LT(fit.rms_mm, 0.003);
   EXPECT_GT(fit.overlap, 0.9);
   double worst = 0;
   for (int v = 0; v < cad.mesh.vertices.rows(); ++v)
     worst = std::max(worst, (fit.T_target_source * vertex(cad.mesh, v) - truth * vertex(cad.mesh, v)).norm());
-  EXPECT_LT(worst, 0.002) << "worst vertex off by " << worst << " mm";
+  EXPECT_LT(worst, 0.0005) << "worst vertex off by " << worst << " mm";
 }
 
 TEST(PointToPlaneIcp, RefusesAStartWithNothingInReach) {
