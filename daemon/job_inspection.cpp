@@ -3,6 +3,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cmath>
+
 #include "daemon/client/rpc_error.hpp"
 #include "geometry/file_error.hpp"
 #include "geometry/mesh_io.hpp"
@@ -24,6 +26,14 @@ Eigen::Isometry3d centred_start(const geometry::TriangleMesh& nominal, const geo
   Eigen::Isometry3d start = Eigen::Isometry3d::Identity();
   start.translation() = reference.vertices.colwise().mean().transpose() - nominal.vertices.colwise().mean().transpose();
   return start;
+}
+
+// How far apart the two meshes' bounding boxes are (0 when they overlap).
+double box_gap_mm(const geometry::TriangleMesh& a, const geometry::TriangleMesh& b) {
+  const Eigen::RowVector3d gap = (b.vertices.colwise().minCoeff() - a.vertices.colwise().maxCoeff())
+                                     .cwiseMax(a.vertices.colwise().minCoeff() - b.vertices.colwise().maxCoeff())
+                                     .cwiseMax(0.0);
+  return gap.norm();
 }
 
 }  // namespace
@@ -61,6 +71,15 @@ std::optional<planner::InspectionResult> inspect_job(const JobRequest& request, 
     placement.overlap = fit.overlap;
     spdlog::info("nominal {}: fitted onto the reference in {} iterations, RMS {:.4f} mm, overlap {:.2f}", n.model,
                  fit.iterations, fit.rms_mm, fit.overlap);
+  }
+  if (n.placement == "given") {
+    // A nominal given in another frame (the CAD origin, a scale of 1000) would only say "no nominal
+    // edge near" for every point: say what is wrong instead.
+    const double gap = box_gap_mm(mesh, reference.mesh);
+    if (gap > 10)
+      throw nominal_error(n.model, "lies " + std::to_string(static_cast<long long>(std::lround(gap))) +
+                                       " mm from the reference: it is not in the reference's frame (check its scale, "
+                                       "or ask for \"placement\": \"fit\")");
   }
   const planner::NominalModel nominal = planner::nominal_model(mesh, placement.T_S_N, request.feature_angle_deg);
   return planner::inspect(result, reference.features.points, nominal, request.tolerances, placement);
