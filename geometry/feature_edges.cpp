@@ -78,11 +78,12 @@ std::vector<FeatureCurve> chain(const TriangleMesh& mesh, const EdgeAdjacency& a
   return curves;
 }
 
-// Drops curves that end in nothing and are shorter than min_length; and, shorter than
-// min_spoke_length, curves attached to nothing at either end and the spokes of a star (a junction
-// whose every curve ends in nothing: a cone tip). Returns the curves that remain.
+// Drops curves that end in nothing and are shorter than min_length, and with drop_short_loops closed
+// ones too; and, shorter than min_spoke_length, curves attached to nothing at either end and the
+// spokes of a star (a junction whose every curve ends in nothing: a cone tip). Returns the curves
+// that remain.
 std::vector<FeatureCurve> prune_dangling(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, double min_length,
-                                         double min_spoke_length, std::vector<char>& is_feature) {
+                                         double min_spoke_length, bool drop_short_loops, std::vector<char>& is_feature) {
   std::vector<FeatureCurve> curves = chain(mesh, adjacency, is_feature);
   const FeatureGraph g = feature_graph(adjacency, is_feature, static_cast<int>(mesh.vertices.rows()));
   auto dangling = [&](const FeatureCurve& c) {
@@ -96,7 +97,7 @@ std::vector<FeatureCurve> prune_dangling(const TriangleMesh& mesh, const EdgeAdj
   }
   bool pruned = false;
   for (const FeatureCurve& c : curves) {
-    if (c.closed && c.length < min_length) {  // a speck of noise closing on itself
+    if (drop_short_loops && c.closed && c.length < min_length) {  // a speck of noise closing on itself
       for (int e : c.edges) is_feature[e] = 0;
       pruned = true;
     }
@@ -199,10 +200,12 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
   const double min_spoke_length =
       (result.noisy ? options.noisy_min_spoke_edges : options.min_spoke_edges) * result.mean_edge_length;
   options.cancel.throw_if_requested("feature edge detection");
-  prune_dangling(mesh, adjacency, min_length, min_spoke_length, result.is_feature);
+  // On an exact mesh a loop of sharp edges is real however short: a Ø10 rim among a CAD export's
+  // 40 mm facets is shorter than three mean edges. Only noise closes on itself.
+  prune_dangling(mesh, adjacency, min_length, min_spoke_length, result.noisy, result.is_feature);
   options.cancel.throw_if_requested("feature edge detection");
   extend_free_ends(mesh, adjacency, cos_dihedral, std::cos(options.continuation_fraction * threshold), result.is_feature);
-  result.curves = prune_dangling(mesh, adjacency, min_length, min_spoke_length, result.is_feature);
+  result.curves = prune_dangling(mesh, adjacency, min_length, min_spoke_length, result.noisy, result.is_feature);
 
   for (FeatureCurve& c : result.curves) {
     double convex_length = 0;

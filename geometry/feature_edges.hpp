@@ -23,10 +23,10 @@ struct FeatureOptions {
   // 1 mm edges tilts them by 11°, 10 µm on 0.2 mm edges by 6°; a decimated mesh's 7 µm on 3 mm edges
   // by 0.3°, and an exact mesh's less than 1 µm not at all, however coarse or thin its triangles.
   double noisy_facet_tilt_deg = 1.0;
-  // Curves that end in nothing (or close on themselves) and are shorter than this many mean edge
-  // lengths are dropped: on a
-  // clean mesh they are the spokes of a coarsely tessellated cone apex, on a noisy one specks and
-  // spurs of noise. A true crease ending in a smooth blend is longer.
+  // Curves that end in nothing (or, on a noisy mesh, close on themselves) and are shorter than this
+  // many mean edge lengths are dropped: on a clean mesh they are the spokes of a coarsely tessellated
+  // cone apex, on a noisy one specks and spurs of noise. A true crease ending in a smooth blend is
+  // longer; a clean mesh's closed loop is kept whatever its length (a small hole's rim).
   double min_dangling_edges = 3;
   double noisy_min_dangling_edges = 5;
   // Curves attached to nothing at either end, and the spokes of a star junction (every curve at it

@@ -144,6 +144,24 @@ TEST_P(FeatureModelOnParts, MatchesTruth) {
   }
 }
 
+// A CAD export: a few large triangles, its hole rims shorter than three mean edge lengths. Every rim
+// is a loop of exact sharp edges and must be found; only a noisy mesh's short loops are noise.
+TEST(FeatureModelOnCadExports, FindEveryHoleHoweverLongTheFacetsBesideIt) {
+  for (const AnalyticPart& part : {make_case3_block({Tessellation::Style::cad, 1.0, 0.002}),
+                                   make_plate_with_holes({Tessellation::Style::cad, 1.0, 0.002})}) {
+    const FeatureModel model = extract_features(part.mesh);
+    EXPECT_FALSE(model.features.noisy) << part.name;
+    EXPECT_EQ(model.holes.size(), part.holes.size()) << part.name << ", mean edge " << model.features.mean_edge_length << " mm";
+    for (const TrueHole& truth : part.holes) {
+      const auto found = std::find_if(model.holes.begin(), model.holes.end(),
+                                      [&](const Hole& h) { return (h.centre - truth.centre).norm() < 0.05; });
+      ASSERT_NE(found, model.holes.end()) << part.name << ": no hole at " << truth.centre.transpose() << ", Ø"
+                                          << 2 * truth.radius;
+      EXPECT_NEAR(found->radius, truth.radius, 0.01 * truth.radius);
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(AnalyticParts, FeatureModelOnParts,
                          ::testing::Combine(::testing::ValuesIn(cases()), ::testing::Values(clean, noisy)),
                          [](const auto& info) {
