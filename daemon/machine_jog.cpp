@@ -51,7 +51,8 @@ JogRequest jog_request_from_json(const nlohmann::json& params, const JogOptions&
     if (f.require("direction", "[x, y, z], not all zero")) {
       const std::size_t problems = f.problem_count();
       const hal::Vec3 d = f.vec3("direction", hal::Vec3::Zero());
-      if (d.allFinite() && d.norm() > 1e-9) r.direction = d.normalized();
+      // stableNorm: [1e308, 1e308, 0] is a direction too, and norm() would overflow it to zero.
+      if (d.allFinite() && d.stableNorm() > 1e-9) r.direction = d.stableNormalized();
       else if (f.problem_count() == problems) f.problem("direction", "must not be zero");
     }
     r.speed_mm_s = f.number("speed_mm_s", options.max_speed_mm_s, 0.001, options.max_speed_mm_s);

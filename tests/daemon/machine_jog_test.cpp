@@ -288,6 +288,9 @@ TEST(JogRequest, IsCheckedFieldByFieldAgainstTheConfiguredLimits) {
   EXPECT_EQ(r.distance_mm, 2);
   EXPECT_EQ(r.hold_s, 0.3);
   EXPECT_FALSE(jog_request_from_json({{"direction", {1, 0, 0}}}, options).distance_mm);
+  // Components whose squares overflow still give a unit direction, not a zero one.
+  const JogRequest huge = jog_request_from_json({{"direction", {1e308, -1e308, 0}}}, options);
+  EXPECT_LT((huge.direction - hal::Vec3(1, -1, 0).normalized()).norm(), 1e-12);
 
   const auto path_of = [&](const json& params) {
     try {
