@@ -2,8 +2,9 @@
 // ('\n', a '\r' before it dropped, blank lines skipped, a last line without '\n' dropped), each line
 // through parse_message and RpcDispatcher as RpcSession::on_line does, with the real server.auth and
 // server.subscribe of an RpcServer that is never started, and the application methods' request
-// parsing (job.submit, plan.preview, registration.fit, model.upload's base64) behind their roles. The framing itself is
+// parsing (job.submit, plan.preview, registration.fit, machine.jog, model.upload's base64) behind their roles. The framing itself is
 // private to RpcSession and needs a socket, so it is mirrored here, not called.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -17,6 +18,7 @@
 #include "daemon/client/base64.hpp"
 #include "daemon/daemon_config.hpp"
 #include "daemon/job_request.hpp"
+#include "daemon/machine_jog.hpp"
 #include "daemon/client/json_rpc.hpp"
 #include "daemon/rpc_server.hpp"
 #include "fuzz_support.hpp"
@@ -42,15 +44,25 @@ struct Harness {
     dispatcher.add("server.info", {Role::none, Work::quick, [this](const json&, RpcContext& ctx) {
                      return json{{"name", "cmmd"}, {"role", to_string(ctx.role())}, {"methods", dispatcher.methods()}};
                    }});
-    for (const char* m : {"machine.status", "job.result"}) dispatcher.add(m, {Role::observer, Work::blocking, no_machine});
+    for (const char* m : {"machine.status", "job.result", "job.report", "job.view"})
+      dispatcher.add(m, {Role::observer, Work::blocking, no_machine});
     for (const char* m : {"machine.home", "machine.reset", "machine.qualify"})
       dispatcher.add(m, {Role::operator_, Work::blocking, no_machine});
-    for (const char* m : {"machine.stop", "machine.abort", "job.pause", "job.resume", "job.cancel"})
+    for (const char* m : {"machine.stop", "machine.abort", "machine.jog_stop", "server.dashboard", "job.pause", "job.resume",
+                          "job.cancel"})
       dispatcher.add(m, {Role::operator_, Work::quick, empty});
     for (const char* m : {"job.get", "job.list"}) dispatcher.add(m, {Role::observer, Work::quick, empty});
     dispatcher.add("job.submit", {Role::operator_, Work::blocking, [this](const json& p, RpcContext&) {
                      const JobRequest r = parse_job_request(p, config);
                      return json{{"model", r.model}, {"name", r.name}};
+                   }});
+    // As machine_jog.cpp's machine.jog up to the machine: the params checked against the config's limits.
+    dispatcher.add("machine.jog", {Role::operator_, Work::blocking, [this](const json& p, RpcContext&) -> json {
+                     const JogRequest r = jog_request_from_json(p, config.jog);
+                     if (!(r.speed_mm_s > 0 && r.speed_mm_s <= config.jog.max_speed_mm_s)) __builtin_trap();
+                     if (r.distance_mm && !(*r.distance_mm > 0 && std::isfinite(*r.distance_mm))) __builtin_trap();
+                     if (!(std::abs(r.direction.norm() - 1) < 1e-9)) __builtin_trap();
+                     throw std::runtime_error("no machine in the harness");
                    }});
     dispatcher.add("plan.preview", {Role::observer, Work::planning, [this](const json& p, RpcContext&) {
                      const JobRequest r = parse_job_request(p, config, true);

@@ -188,6 +188,17 @@ put("job_request", "preview.json", json.dumps({"model": "file:part.ply"}))
 put("job_request", "raw-scan.json", json.dumps(dict(submit, model="sha256:" + "0" * 64 + ".pcd", tolerance_mm=0.05,
                                                     bin_size_mm=0.2, adaptive=True)))
 
+tolerances = {"edge_profile_mm": 0.05, "hole_diameter_mm": [-0.02, 0.03], "hole_position_mm": 0.1,
+              "coverage_factor": 2, "machine_uncertainty_mm": 0.002,
+              "edge_points": {"17": 0.01}, "curves": {"2": 0.2},
+              "holes": {"0": {"diameter_mm": [-0.01, 0.01], "position_mm": 0.05}}}
+put("job_request", "inspection.json", json.dumps(dict(submit, nominal={"model": "file:part-cad.stl", "scale": 1,
+                                                                      "placement": "fit"}, tolerances=tolerances)))
+put("job_request", "inspection-bad.json", json.dumps(dict(submit, nominal={"model": "http://x", "scale": 1e9,
+    "placement": "guess"}, tolerances={"edge_profile_mm": 1e400, "hole_diameter_mm": [0.1, -0.1],
+                                       "edge_points": {"4294967297": 0.1, "-1": 0.1, "x": 0.1},
+                                       "holes": {"1": {"diameter_mm": "wide"}}})).replace("Infinity", "1e400"))
+
 
 def rpc(method, params=None, id=1):
     message = {"jsonrpc": "2.0", "method": method, "id": id}
@@ -220,6 +231,18 @@ put("json_rpc", "invalid.jsonl", '{"jsonrpc": "2.0", "method": "foobar, "params"
     '{"jsonrpc": "2.0", "method": 1, "params": "bar"}\n{"jsonrpc": "1.0", "method": "server.info", "id": {}}\n'
     '[1e400]\n' + "[" * 200 + "]" * 200 + "\n")
 put("job_request", "rpc-line.json", session[5])
+put("json_rpc", "operator-view.jsonl", "\n".join([
+    rpc("server.auth", {"token": "operator-token-0123456789"}),
+    rpc("server.dashboard", None, 2),
+    rpc("machine.jog", {"direction": [1, 0, 0], "speed_mm_s": 2, "hold_s": 0.3}, 3),
+    rpc("machine.jog", {"direction": [0, 3, -4], "distance_mm": 5}, 4),
+    rpc("machine.jog", {"direction": [0, 0, 0], "speed_mm_s": 1e9, "distance_mm": -1}, 5),
+    rpc("machine.jog_stop", None, 6),
+    rpc("job.view", {"job": 1}, 7),
+    rpc("job.report", {"job": 4294967297}, 8),
+    rpc("job.result", {"job": 1, "format": "qif"}, 9),
+    rpc("job.submit", dict(submit, tolerances=tolerances), 10),
+]) + "\n")
 
 # --- Grbl replies (docs/hal.md) and Modbus register blocks (docs/modbus-map.md) -------------------
 put("grbl", "replies.txt", "Grbl 1.1h ['$' for help]\r\nok\r\n<Idle|MPos:0.000000,0.000000,0.000000|FS:0,0|T:0.000000>\r\n"
@@ -259,4 +282,24 @@ text = [int.from_bytes(b"Ea", "big"), int.from_bytes(b"rl", "big"), int.from_byt
 put("modbus_status", "status-tip-text.bin", regs(*status, *tip, *text))
 put("modbus_status", "fault.bin", regs(0, 0b101101, 8, 3, 8, *([0] * 20), *tip))
 put("modbus_status", "short.bin", regs(1, 2, 3))
+
+# --- HTTP requests to the dashboard (docs/api.md, Dashboard transport) ----------------------------
+def request(target, *headers, method="GET", version="1.1"):
+    return f"{method} {target} HTTP/{version}\r\n" + "".join(h + "\r\n" for h in headers) + "\r\n"
+
+
+upgrade = ("Connection: Upgrade", "Upgrade: websocket", "Sec-WebSocket-Version: 13",
+           "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==")
+put("http_request", "pages.txt", request("/", "Host: 127.0.0.1:8080") + request("/static/app.js", "Host: localhost:8080")
+    + request("/lib/three/build/three.module.js", "Host: [::1]:8080", method="HEAD")
+    + request("/jobs/12/report?token=abc%20def", "Host: 10.1.2.3:8080"))
+put("http_request", "websocket.txt", request("/rpc", "Host: 127.0.0.1:8080", "Origin: http://127.0.0.1:8080", *upgrade)
+    + request("/rpc", "Host: cmm-station-3.example", "Origin: https://cmm-station-3.example", *upgrade))
+put("http_request", "hostile.txt", request("/static/..%2f..%2fetc/passwd", "Host: 127.0.0.1:8080")
+    + request("/static/%2e%2e/%2E%2E/cmmd.json", "Host: 127.0.0.1:8080") + request("/static/%00", "Host: localhost:8080")
+    + request("/jobs/-1/report", "Host: localhost:8080") + request("/jobs/99999999999/report", "Host: localhost:8080")
+    + request("/rpc", "Host: attacker.example:8080", "Origin: http://attacker.example:8080", *upgrade)
+    + request("/rpc", "Host: 127.0.0.1:8080", "Origin: null", *upgrade)
+    + request("/", "Host: 127.0.0.1:8080", "Content-Length: 5", method="POST") + "hello"
+    + request("//lib/three/../../../", "Host: 127.0.0.1:8080", version="1.0"))
 print("seeds written under", corpus)
