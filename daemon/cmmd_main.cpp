@@ -20,6 +20,7 @@
 #include "daemon/job_manager.hpp"
 #include "daemon/job_store.hpp"
 #include "daemon/machine_link.hpp"
+#include "daemon/metrics.hpp"
 #include "daemon/model_store.hpp"
 #include "daemon/rpc_server.hpp"
 #include "daemon/service_methods.hpp"
@@ -124,10 +125,12 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
   asio::io_context io;
   RpcDispatcher dispatcher;
   DashboardLink dashboard;  // before the servers: their handlers use it until they stop
+  std::unique_ptr<Metrics> metrics;  // counts what the notifications tell, for /metrics; outlives the servers
   std::unique_ptr<RpcServer> server;
   std::unique_ptr<WebServer> web;  // the dashboard; null with http.enabled false
-  const MachineMonitor::Notify notify = [&server, &web](const std::string& topic, const std::string& method,
-                                                        const nlohmann::json& params) {
+  const MachineMonitor::Notify notify = [&server, &web, &metrics](const std::string& topic, const std::string& method,
+                                                                  const nlohmann::json& params) {
+    if (metrics) metrics->observe(method, params);
     if (server) server->notify(topic, method, params);
     if (web) web->notify(topic, method, params);
   };
@@ -136,8 +139,16 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
   add_service_methods(dispatcher, service);
   add_dashboard_method(dispatcher, dashboard);
   server = std::make_unique<RpcServer>(io, dispatcher, config.server);
-  if (config.http.enabled)
+  const std::vector<std::string> methods = dispatcher.methods();  // server.auth and server.subscribe among them now
+  metrics = std::make_unique<Metrics>(std::set<std::string>(methods.begin(), methods.end()));
+  dispatcher.on_answered([&metrics](const std::string& method, bool error) { metrics->count_request(method, error); });
+  if (config.http.enabled) {
     web = std::make_unique<WebServer>(dispatcher, server->tokens(), config.server, config.http, config.state_dir / "jobs");
+    web->serve_metrics([&metrics, &server, &web] {
+      return metrics->text({.socket_clients = static_cast<long long>(server->connection_count()),
+                            .websocket_clients = static_cast<long long>(web->connection_count())});
+    });
+  }
   server->start();
   if (web) {
     const std::string token = set_up_dashboard_token(server->tokens(), config.state_dir / "dashboard.token");

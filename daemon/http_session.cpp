@@ -110,6 +110,9 @@ void HttpSession::handle(Request request) {
     case RouteKind::file: return serve_file(request, route);
     case RouteKind::job_report: return serve_report(request, route);
     case RouteKind::bad_request: return send_text(request, http::status::bad_request, route.problem);
+    case RouteKind::metrics:
+      if (!site_.metrics) break;
+      return send_metrics(request);
     case RouteKind::rpc:
       return send_text(request, http::status::upgrade_required, "cmmd's JSON-RPC WebSocket: connect with a WebSocket client");
     case RouteKind::not_found: break;
@@ -180,6 +183,17 @@ void HttpSession::send_text(const Request& request, http::status status, const s
   if (request.method() != http::verb::head) response.body() = text + "\n";
   response.prepare_payload();
   if (request.method() == http::verb::head) response.content_length(text.size() + 1);
+  send(std::move(response));
+}
+
+void HttpSession::send_metrics(const Request& request) {
+  const std::string text = site_.metrics();
+  http::response<http::string_body> response{http::status::ok, request.version()};
+  set_common(response, request, "no-store");
+  response.set(http::field::content_type, "text/plain; version=0.0.4; charset=utf-8");  // Prometheus's text format
+  if (request.method() != http::verb::head) response.body() = text;
+  response.prepare_payload();
+  if (request.method() == http::verb::head) response.content_length(text.size());
   send(std::move(response));
 }
 

@@ -24,6 +24,7 @@ struct HttpSite {
   std::filesystem::path jobs_dir;  // <state_dir>/jobs, for /jobs/<id>/report
   double idle_timeout_s = 30;      // a request not complete within this: closed
   TokenBook* tokens = nullptr;
+  std::function<std::string()> metrics;  // /metrics's text; unset: not found
 };
 
 class HttpSession : public std::enable_shared_from_this<HttpSession> {
@@ -44,6 +45,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void serve_file(const Request& request, const Route& route);
   void serve_report(const Request& request, const Route& route);
   void send_text(const Request& request, boost::beast::http::status status, const std::string& text);
+  void send_metrics(const Request& request);
   template <class Response>
   void send(Response response);
   void on_written(const boost::beast::error_code& ec, bool close);

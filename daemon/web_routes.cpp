@@ -52,9 +52,9 @@ Route route_of(std::string_view target, const WebRoots& roots) {
   const std::string_view path = *decoded;
 
   if (path == "/" || path == "/index.html") return file(roots.web_root, "index.html", true);
-  if (path == "/rpc") {
+  if (path == "/rpc" || path == "/metrics") {
     Route r;
-    r.kind = RouteKind::rpc;
+    r.kind = path == "/rpc" ? RouteKind::rpc : RouteKind::metrics;
     return r;
   }
   for (const auto& [prefix, root, own] : {std::tuple{std::string_view("/static/"), &roots.web_root, true},

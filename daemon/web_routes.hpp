@@ -1,5 +1,6 @@
 // What a dashboard request's target asks for (docs/api.md, Dashboard transport): a file of the web
-// root or of Debian's JavaScript packages, a job's report, the JSON-RPC WebSocket, or nothing.
+// root or of Debian's JavaScript packages, a job's report, the JSON-RPC WebSocket, the Prometheus
+// metrics, or nothing.
 #pragma once
 
 #include <filesystem>
@@ -14,7 +15,7 @@ struct WebRoots {
   std::filesystem::path chart_js = "/usr/share/javascript/chart.js";  // libjs-chart.js, "/lib/chart.js/"
 };
 
-enum class RouteKind { file, job_report, rpc, not_found, bad_request };
+enum class RouteKind { file, job_report, rpc, metrics, not_found, bad_request };
 
 struct Route {
   RouteKind kind = RouteKind::not_found;

@@ -200,6 +200,11 @@ void WebServer::start() {
 
 int WebServer::port() const { return impl_->site.host_rules.port; }
 
+void WebServer::serve_metrics(std::function<std::string()> metrics) {
+  if (impl_->started) throw std::logic_error("WebServer::serve_metrics after start");
+  impl_->site.metrics = std::move(metrics);
+}
+
 void WebServer::notify(const std::string& topic, const std::string& method, const nlohmann::json& params) {
   Impl& s = *impl_;
   const auto text = std::make_shared<const std::string>(to_wire({{"jsonrpc", "2.0"}, {"method", method}, {"params", params}}));

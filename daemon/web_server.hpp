@@ -33,6 +33,8 @@ class WebServer {
   // (a port in use, a bind beyond loopback without tokens).
   void start();
   int port() const;  // the bound port, also when asked for 0
+  // Before start(): what /metrics serves (Prometheus's text format); unset, /metrics is not found.
+  void serve_metrics(std::function<std::string()> metrics);
 
   // Thread-safe: sends {"method", "params"} to every WebSocket subscribed to topic.
   void notify(const std::string& topic, const std::string& method, const nlohmann::json& params);

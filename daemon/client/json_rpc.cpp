@@ -84,6 +84,16 @@ Work RpcDispatcher::work_of(const json& message) const {
 }
 
 json RpcDispatcher::handle_one(const json& request, RpcContext& ctx, bool& reply) const {
+  json response = answer_one(request, ctx, reply);
+  if (answered_ && reply) {
+    const auto method = request.is_object() ? request.find("method") : request.end();
+    answered_(method != request.end() && method->is_string() ? method->get<std::string>() : std::string(),
+              response.contains("error"));
+  }
+  return response;
+}
+
+json RpcDispatcher::answer_one(const json& request, RpcContext& ctx, bool& reply) const {
   // An invalid request is answered even without an id (spec §7: [1,2,3] gets three errors).
   reply = true;
   const json id = usable_id(request) ? request["id"] : json(nullptr);

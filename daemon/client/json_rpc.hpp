@@ -78,6 +78,10 @@ class RpcDispatcher {
   // registration of one name or on an empty handler.
   void add(std::string method, MethodSpec spec);
   std::vector<std::string> methods() const;  // sorted
+  // Called for each request answered (not for notifications), with the method it named ("" for an
+  // invalid request) and whether the answer is an error; set before a server starts serving.
+  using Answered = std::function<void(const std::string& method, bool error)>;
+  void on_answered(Answered answered) { answered_ = std::move(answered); }
 
   // One message (a request, a notification or a batch) → its reply, or nothing when the spec
   // says no reply (a notification, a batch of notifications). `params` absent reads as {}.
@@ -90,7 +94,9 @@ class RpcDispatcher {
 
  private:
   nlohmann::json handle_one(const nlohmann::json& request, RpcContext& ctx, bool& reply) const;
+  nlohmann::json answer_one(const nlohmann::json& request, RpcContext& ctx, bool& reply) const;
   std::map<std::string, MethodSpec, std::less<>> methods_;
+  Answered answered_;
 };
 
 // What a line may ask of the parser, checked on the text before a value is built: nesting deeper

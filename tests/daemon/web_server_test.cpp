@@ -118,6 +118,7 @@ TEST(WebRoutes, MapsTargetsToRootsReportsAndTheWebSocket) {
     EXPECT_EQ(route_of(not_a_job, roots).kind, RouteKind::not_found) << not_a_job;
 
   EXPECT_EQ(route_of("/rpc", roots).kind, RouteKind::rpc);
+  EXPECT_EQ(route_of("/metrics", roots).kind, RouteKind::metrics);
   EXPECT_EQ(route_of("/rpc/x", roots).kind, RouteKind::not_found);
   EXPECT_EQ(route_of("/static", roots).kind, RouteKind::not_found);
   EXPECT_EQ(route_of("/etc/passwd", roots).kind, RouteKind::not_found);

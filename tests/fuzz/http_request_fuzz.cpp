@@ -61,6 +61,7 @@ void handle(const http::request<http::empty_body>& request, const WebRoots& root
       if (route.job < 0) __builtin_trap();
       return;
     case RouteKind::rpc:
+    case RouteKind::metrics:
     case RouteKind::bad_request:
     case RouteKind::not_found: return;
   }
