@@ -61,7 +61,9 @@ void Metrics::observe(const std::string& method, const nlohmann::json& params, C
     const std::string state = params.value("state", "");
     if (state == "queued") return;
     job_started_.try_emplace(job, now);  // its first step out of the queue (or a resume after a restart)
-    last_touch_.try_emplace(job, now);
+    // A pause is no touch's time: the next touch counts from the resume.
+    if (state == "paused") last_touch_.erase(job);
+    else last_touch_.try_emplace(job, now);
     if (!kFinalStates.contains(state)) return;
     ++jobs_by_state_[state];
     job_seconds_.observe(seconds_between(job_started_[job], now));
@@ -101,7 +103,7 @@ std::string Metrics::text(const MetricsGauges& gauges) const {
   family(out, "cmmd_job_duration_seconds", "histogram", "From a job's start to its final state, pauses included.");
   histogram(out, "cmmd_job_duration_seconds", job_seconds_);
   family(out, "cmmd_touch_duration_seconds", "histogram",
-         "From a job's previous touch (or its start) to the next: travel, approach and contact.");
+         "From a job's previous touch (or its start or resume) to the next: travel, approach and contact.");
   histogram(out, "cmmd_touch_duration_seconds", touch_seconds_);
   family(out, "cmmd_machine_faults_total", "counter", "Machine faults by kind, as the machine monitor saw them appear.");
   labelled(out, "cmmd_machine_faults_total", "kind", faults_by_kind_);

@@ -21,11 +21,12 @@ TEST(Metrics, CountsAJobsTouchesStatesAndDurations) {
   m.observe("job.touch", {{"job", 1}, {"touch", 1}}, t0 + 3300ms);
   m.observe("job.state", {{"job", 1}, {"state", "paused"}}, t0 + 4s);
   m.observe("job.state", {{"job", 1}, {"state", "probing"}}, t0 + 10s);
+  m.observe("job.touch", {{"job", 1}, {"touch", 2}}, t0 + 10400ms);  // 0.4 s after the resume, not 7.1 s
   m.observe("job.state", {{"job", 1}, {"state", "done"}}, t0 + 21s);
   m.observe("job.state", {{"job", 2}, {"state", "cancelled"}}, t0 + 22s);  // from the queue
   const std::string text = m.text({.socket_clients = 2, .websocket_clients = 1});
 
-  EXPECT_TRUE(has_line(text, "cmmd_touches_total 2")) << text;
+  EXPECT_TRUE(has_line(text, "cmmd_touches_total 3")) << text;
   EXPECT_TRUE(has_line(text, "cmmd_jobs_total{state=\"done\"} 1")) << text;
   EXPECT_TRUE(has_line(text, "cmmd_jobs_total{state=\"cancelled\"} 1")) << text;
   EXPECT_TRUE(has_line(text, "cmmd_jobs_total{state=\"failed\"} 0")) << text;
@@ -34,11 +35,11 @@ TEST(Metrics, CountsAJobsTouchesStatesAndDurations) {
   EXPECT_TRUE(has_line(text, "cmmd_job_duration_seconds_bucket{le=\"30\"} 2")) << text;
   EXPECT_TRUE(has_line(text, "cmmd_job_duration_seconds_sum 20")) << text;
   EXPECT_TRUE(has_line(text, "cmmd_job_duration_seconds_count 2")) << text;
-  // The touches: 0.3 s after the start, then 2 s; buckets are cumulative.
+  // The touches: 0.3 s after the start, then 2 s, then 0.4 s after the resume; buckets are cumulative.
   EXPECT_TRUE(has_line(text, "cmmd_touch_duration_seconds_bucket{le=\"0.25\"} 0")) << text;
-  EXPECT_TRUE(has_line(text, "cmmd_touch_duration_seconds_bucket{le=\"0.5\"} 1")) << text;
-  EXPECT_TRUE(has_line(text, "cmmd_touch_duration_seconds_bucket{le=\"2\"} 2")) << text;
-  EXPECT_TRUE(has_line(text, "cmmd_touch_duration_seconds_bucket{le=\"+Inf\"} 2")) << text;
+  EXPECT_TRUE(has_line(text, "cmmd_touch_duration_seconds_bucket{le=\"0.5\"} 2")) << text;
+  EXPECT_TRUE(has_line(text, "cmmd_touch_duration_seconds_bucket{le=\"2\"} 3")) << text;
+  EXPECT_TRUE(has_line(text, "cmmd_touch_duration_seconds_bucket{le=\"+Inf\"} 3")) << text;
   EXPECT_TRUE(has_line(text, "cmmd_connected_clients{transport=\"socket\"} 2")) << text;
   EXPECT_TRUE(has_line(text, "cmmd_connected_clients{transport=\"websocket\"} 1")) << text;
   EXPECT_TRUE(has_line(text, "# TYPE cmmd_job_duration_seconds histogram")) << text;
