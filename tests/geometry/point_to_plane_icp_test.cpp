@@ -33,6 +33,23 @@ TEST(PointToPlaneIcp, RecoversAMovedCaseThreeBlock) {
   EXPECT_LT(worst, 0.0005) << "worst vertex off by " << worst << " mm";
 }
 
+TEST(PointToPlaneIcp, RecoversACaseThreeBlockTurnedByFifteenDegrees) {
+  // Pairs whose normals differ by more than the gate are left out, so a start turned by most of it
+  // must still find enough pairs to come round.
+  const AnalyticPart cad = make_case3_block({Tessellation::Style::cad, 1.0, 0.002});
+  const AnalyticPart fine = make_case3_block(0.5);
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  truth.linear() = Eigen::AngleAxisd(15 * std::numbers::pi / 180, Vec3(0.1, 0.2, 1).normalized()).toRotationMatrix();
+  const Vec3 centre = fine.mesh.vertices.colwise().mean().transpose();
+  truth.translation() = centre - truth.linear() * centre;  // turned about the part's centre
+  const IcpResult fit = point_to_plane_icp(cad.mesh, moved(fine.mesh, truth));
+  ASSERT_TRUE(fit.converged) << fit.iterations << " iterations, RMS " << fit.rms_mm;
+  double worst = 0;
+  for (int v = 0; v < cad.mesh.vertices.rows(); ++v)
+    worst = std::max(worst, (fit.T_target_source * vertex(cad.mesh, v) - truth * vertex(cad.mesh, v)).norm());
+  EXPECT_LT(worst, 0.0005) << "worst vertex off by " << worst << " mm";
+}
+
 TEST(PointToPlaneIcp, RefusesAStartWithNothingInReach) {
   const AnalyticPart cube = make_cube(10, 1.0);
   Eigen::Isometry3d far = Eigen::Isometry3d::Identity();
