@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "daemon/client/fleet_listing.hpp"
 #include "daemon/client/model_upload.hpp"
 #include "daemon/client/progress_bar.hpp"
 #include "daemon/client/rpc_client.hpp"
@@ -32,7 +33,49 @@ struct Global {
   std::string endpoint;
   std::string token;
   bool raw_json = false;
+  // A fleet's broker (docs/fleet.md): `fleet` reads it, --station sends every command through it.
+  std::string broker, broker_user, broker_password, topic_prefix = "cmmd", station;
+  MqttTls broker_tls;
 };
+
+std::string from_env(const std::string& given, const char* variable) {
+  if (!given.empty()) return given;
+  const char* value = std::getenv(variable);
+  return value ? value : "";
+}
+
+// --broker HOST[:PORT] (or $CMMD_BROKER); 1883, or 8883 with TLS, when no port is given.
+MqttConnect broker_of(const Global& g) {
+  MqttConnect c;
+  const std::string broker = from_env(g.broker, "CMMD_BROKER");
+  if (broker.empty()) throw std::runtime_error("no broker: give --broker HOST[:PORT] or set $CMMD_BROKER");
+  const std::size_t colon = broker.rfind(':');
+  c.host = colon == std::string::npos ? broker : broker.substr(0, colon);
+  c.tls = g.broker_tls;
+  c.port = colon == std::string::npos ? (c.tls.ca_file.empty() ? 1883 : 8883) : std::stoi(broker.substr(colon + 1));
+  c.username = from_env(g.broker_user, "CMMD_BROKER_USER");
+  c.password = from_env(g.broker_password, "CMMD_BROKER_PASSWORD");
+  return c;
+}
+
+void print_fleet(const std::vector<json>& stations, bool raw_json) {
+  if (raw_json) {
+    std::cout << json(stations).dump(1) << "\n";
+    return;
+  }
+  if (stations.empty()) std::printf("no station has a status on this broker\n");
+  for (const json& s : stations) {
+    const json machine = s.value("machine", json(nullptr)), job = s.value("job", json(nullptr));
+    std::string what = s.value("online", false) ? "online " : "OFFLINE";
+    if (machine.is_object())
+      what.append("  machine ").append(machine.value("link", "?")).append(" (").append(machine.value("lifecycle", "?")).append(")");
+    if (machine.is_object() && machine.value("fault", json(nullptr)).is_object())
+      what.append(" fault ").append(machine["fault"].value("kind", "?"));
+    if (job.is_object()) what.append("  job ").append(std::to_string(job.value("id", 0))).append(" ").append(job.value("state", ""));
+    else if (s.value("online", false)) what.append("  idle");
+    std::printf("%-16s %s\n", s.value("station", "?").c_str(), what.c_str());
+  }
+}
 
 std::string default_endpoint() {
   if (const char* e = std::getenv("CMMD_ENDPOINT"); e != nullptr && *e != '\0') return e;
@@ -41,10 +84,10 @@ std::string default_endpoint() {
 }
 
 RpcClient connect(const Global& g) {
+  const std::string token = from_env(g.token, "CMMD_TOKEN");
+  if (const std::string station = from_env(g.station, "CMMD_STATION"); !station.empty())
+    return RpcClient::connect_station({broker_of(g), g.topic_prefix, station, token});  // the token rides on each request
   RpcClient client = RpcClient::connect(g.endpoint.empty() ? default_endpoint() : g.endpoint);
-  std::string token = g.token;
-  if (token.empty())
-    if (const char* t = std::getenv("CMMD_TOKEN")) token = t;
   if (!token.empty()) client.call("server.auth", {{"token", token}});
   return client;
 }
@@ -288,10 +331,19 @@ int main(int argc, char** argv) {
   CLI::App app{"cmmctl: operate cmmd (docs/api.md). Endpoint: --endpoint, $CMMD_ENDPOINT, "
                "unix:/run/cmmd/cmmd.sock if present, else tcp://127.0.0.1:7620"};
   app.require_subcommand(1);
+  app.fallthrough();  // the global options (--station, --broker, --token, …) also after the command
   Global g;
   app.add_option("-e,--endpoint", g.endpoint, "tcp://HOST:PORT or unix:/PATH");
   app.add_option("--token", g.token, "access token for TCP (or $CMMD_TOKEN)");
   app.add_flag("--json", g.raw_json, "print replies as JSON");
+  app.add_option("--station", g.station, "send the command to this station through the broker (or $CMMD_STATION)");
+  app.add_option("--broker", g.broker, "the fleet's MQTT broker, HOST[:PORT] (or $CMMD_BROKER)");
+  app.add_option("--broker-user", g.broker_user, "broker user name (or $CMMD_BROKER_USER)");
+  app.add_option("--broker-password", g.broker_password, "broker password (or $CMMD_BROKER_PASSWORD)");
+  app.add_option("--broker-ca", g.broker_tls.ca_file, "the broker's CA (PEM): TLS on");
+  app.add_option("--broker-cert", g.broker_tls.cert_file, "client certificate (PEM) for the broker");
+  app.add_option("--broker-key", g.broker_tls.key_file, "its key (PEM)");
+  app.add_option("--topic-prefix", g.topic_prefix, "the fleet's topic prefix (cmmd.json mqtt.topic_prefix)");
 
   std::string model, corners, measure, name, format = "json", output, tip;
   double scale = 1, delta = 0.2, spacing = 2, angle = 30;
@@ -372,6 +424,7 @@ int main(int argc, char** argv) {
   teach_cmd->add_option("CORNER_ID", corner, "the plate corner (1, 2, …)")->required();
   teach_cmd->add_option("--file", corners_file, "the measure_plate file (created if missing; the rest kept)")->required();
   app.add_subcommand("ports", "serial ports on this computer, with USB ids");
+  app.add_subcommand("fleet", "every station on the broker (--broker) with its state and current job");
   app.add_subcommand("dashboard", "the dashboard's URL to open in a browser (with the operator's token when cmmd.json sets none)");
   CLI11_PARSE(app, argc, argv);
 
@@ -381,6 +434,10 @@ int main(int argc, char** argv) {
       const auto ports = hal::list_serial_ports();
       if (ports.empty()) std::printf("no serial ports found\n");
       for (const auto& p : ports) std::printf("%s\n", hal::describe(p).c_str());
+      return 0;
+    }
+    if (command == "fleet") {
+      print_fleet(list_fleet(broker_of(g), g.topic_prefix), g.raw_json);
       return 0;
     }
     RpcClient client = connect(g);

@@ -21,6 +21,7 @@
 #include "daemon/job_store.hpp"
 #include "daemon/machine_link.hpp"
 #include "daemon/metrics.hpp"
+#include "daemon/mqtt_station.hpp"
 #include "daemon/model_store.hpp"
 #include "daemon/rpc_server.hpp"
 #include "daemon/service_methods.hpp"
@@ -128,11 +129,14 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
   std::unique_ptr<Metrics> metrics;  // counts what the notifications tell, for /metrics; outlives the servers
   std::unique_ptr<RpcServer> server;
   std::unique_ptr<WebServer> web;  // the dashboard; null with http.enabled false
-  const MachineMonitor::Notify notify = [&server, &web, &metrics](const std::string& topic, const std::string& method,
-                                                                  const nlohmann::json& params) {
+  std::unique_ptr<MqttStation> fleet;  // the station on the fleet's broker; null with mqtt.enabled false
+  const MachineMonitor::Notify notify = [&server, &web, &metrics, &fleet](
+                                            const std::string& topic, const std::string& method,
+                                            const nlohmann::json& params) {
     if (metrics) metrics->observe(method, params);
     if (server) server->notify(topic, method, params);
     if (web) web->notify(topic, method, params);
+    if (fleet) fleet->notify(method, params);
   };
   JobManager jobs(config, machine, models, store, notify, CMMD_VERSION);
   Service service{config, machine, models, jobs, CMMD_VERSION};
@@ -149,6 +153,11 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
                             .websocket_clients = static_cast<long long>(web->connection_count())});
     });
   }
+  if (config.mqtt.enabled) {
+    fleet = std::make_unique<MqttStation>(config.mqtt, CMMD_VERSION, config.state_dir, dispatcher, server->tokens(),
+                                          MqttRequestLimits{.max_request_bytes = config.server.max_request_bytes,
+                                                            .max_batch_entries = config.server.max_batch_entries});
+  }
   server->start();
   if (web) {
     const std::string token = set_up_dashboard_token(server->tokens(), config.state_dir / "dashboard.token");
@@ -156,6 +165,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
     dashboard.set(dashboard_url(config.server.tcp_bind, web->port(), token));
     spdlog::info("dashboard: {}", *dashboard.url());
   }
+  if (fleet) fleet->start();
   jobs.start();
   MachineMonitor monitor(machine, jobs, notify, notifier);
 
@@ -198,6 +208,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
         machine.cmm().stop();
       } catch (const std::exception&) {
       }
+      if (fleet) fleet->stop();  // after the job's last state went to the outbox; leaves with the last will
       asio::post(io, [&] {
         server->stop();
         if (web) web->stop();

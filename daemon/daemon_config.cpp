@@ -105,6 +105,43 @@ void read_http(description::JsonFields& b, DaemonConfig& c, const std::filesyste
   b.finish();
 }
 
+// A name inside a topic: MQTT's wildcards and separators would put it under other topics.
+void check_topic_part(description::JsonFields& b, const char* key, const std::string& text, bool slashes) {
+  if (text.empty() || text.find_first_of(slashes ? "+#" : "+#/") != std::string::npos || text.front() == '/' ||
+      text.back() == '/' || text.starts_with("$"))
+    b.problem(key, std::string("must be a topic ").append(slashes ? "prefix" : "level").append(
+                       " without + # $ or a leading or trailing /, not \"" + text + "\""));
+}
+
+void read_mqtt(description::JsonFields& b, MqttOptions& m, const std::filesystem::path& base_dir) {
+  m.enabled = b.flag("enabled", m.enabled);
+  m.broker = b.text("broker", m.broker);
+  m.port = b.integer("port", m.port, 1, 65535);
+  m.username = b.text("username", "");
+  m.password = b.text("password", "");
+  m.station = b.text("station", "");
+  if (!m.station.empty()) check_topic_part(b, "station", m.station, false);
+  m.topic_prefix = b.text("topic_prefix", m.topic_prefix);
+  check_topic_part(b, "topic_prefix", m.topic_prefix, true);
+  m.keepalive_s = b.integer("keepalive_s", m.keepalive_s, 5, 3600);
+  m.progress_interval_s = b.number("progress_interval_s", m.progress_interval_s, 0, 3600);
+  if (b.has("tls")) {
+    description::JsonFields tls = b.object("tls");
+    auto file = [&](const char* key) {
+      const std::string text = tls.text(key, "");
+      return text.empty() ? std::string() : description::resolve_config_path(text, base_dir).string();
+    };
+    m.tls.ca_file = file("ca_file");
+    m.tls.cert_file = file("cert_file");
+    m.tls.key_file = file("key_file");
+    if (m.tls.ca_file.empty()) tls.problem("ca_file", "is needed for TLS (the broker's CA, PEM)");
+    if (m.tls.cert_file.empty() != m.tls.key_file.empty())
+      tls.problem("cert_file", "a client certificate needs both cert_file and key_file");
+    tls.finish();
+  }
+  b.finish();
+}
+
 }  // namespace
 
 std::string default_station_name() {
@@ -188,6 +225,12 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j, const std::string&
   }
   // "" (or absent) is the host's name: one config file can serve every station of a fleet.
   if (const std::string station = block.text("station", ""); !station.empty()) c.station = station;
+  {
+    description::JsonFields mqtt = block.object("mqtt");
+    read_mqtt(mqtt, c.mqtt, base_dir);
+    if (c.mqtt.station.empty()) c.mqtt.station = c.station;
+    if (c.mqtt.enabled) check_topic_part(mqtt, "station", c.mqtt.station, false);
+  }
   block.finish();
   block.throw_if_problems(source);
   return c;
@@ -212,6 +255,7 @@ std::vector<std::string> changes_needing_restart(const DaemonConfig& running, co
     changed.push_back("jog");
   if (running.tolerances != next.tolerances) changed.push_back("tolerances");
   if (running.station != next.station) changed.push_back("station");
+  if (running.mqtt != next.mqtt) changed.push_back("mqtt");
   if (running.state_dir != next.state_dir) changed.push_back("state_dir");
   if (running.runtime_dir != next.runtime_dir) changed.push_back("runtime_dir");
   if (running.models_dir != next.models_dir) changed.push_back("models_dir");

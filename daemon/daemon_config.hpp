@@ -9,6 +9,7 @@
 
 #include "daemon/driver_factory.hpp"
 #include "daemon/http_options.hpp"
+#include "daemon/mqtt_options.hpp"
 #include "daemon/rpc_server.hpp"
 #include "hal/description/machine_description.hpp"
 #include "hal/description/plate.hpp"
@@ -50,6 +51,7 @@ struct DaemonConfig {
   planner::Tolerances tolerances;  // a job's, where its request gives none (planner/tolerances_json.hpp)
   // This station's name in reports and QIF files (and, later, on a fleet's broker); default the host's name.
   std::string station = default_station_name();
+  MqttOptions mqtt;  // the fleet's broker; mqtt.station resolved (the station above when unset)
 };
 
 // Reads `file`; relative paths in it resolve against its folder. Throws description::FieldError

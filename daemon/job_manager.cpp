@@ -119,7 +119,10 @@ const JobManager::Job& JobManager::find(int id) const { return const_cast<JobMan
 
 void JobManager::notify_state(const Job& job) {
   notify_("job", "job.state",
-          {{"job", job.record.id}, {"state", to_string(job.record.state)}, {"reason", job.record.reason}});
+          {{"job", job.record.id},
+           {"state", to_string(job.record.state)},
+           {"reason", job.record.reason},
+           {"verdict", job.record.verdict}});
 }
 
 void JobManager::set_state(Job& job, JobState state, const std::string& reason, const std::optional<JobFault>& fault) {

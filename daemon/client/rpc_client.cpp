@@ -65,6 +65,7 @@ struct RpcClient::Connection {
   std::size_t scanned = 0;  // inbox before this holds no newline
   std::deque<json> notifications;
   std::int64_t next_id = 1;
+  std::unique_ptr<StationLink> station;  // set: lines go through the broker, not the socket
 
   // Runs the connect started before it until it completes or the deadline passes (then it is
   // cancelled and completes with operation_aborted, unless it had completed already).
@@ -112,6 +113,7 @@ struct RpcClient::Connection {
   }
 
   std::optional<std::string> next_line(Clock::time_point deadline) {
+    if (station) return station->next_line(deadline);
     for (;;) {
       if (const auto end = inbox.find('\n', scanned); end != std::string::npos) {
         std::string line = inbox.substr(0, end);
@@ -126,6 +128,13 @@ struct RpcClient::Connection {
   }
 
   void send(std::string_view bytes, double timeout_s) {
+    if (station) {
+      try {
+        return station->send(bytes);
+      } catch (const std::exception& e) {
+        throw RpcClientError(e.what());
+      }
+    }
     const auto deadline = deadline_in(timeout_s);
     while (!bytes.empty()) {
       asio::error_code ec;
@@ -199,6 +208,17 @@ RpcClient RpcClient::connect(const std::string& endpoint, double timeout_s) {
   return RpcClient(std::move(c));
 }
 
+RpcClient RpcClient::connect_station(StationAddress address, double timeout_s) {
+  auto c = std::make_unique<Connection>();
+  try {
+    c->station = std::make_unique<StationLink>(std::move(address), deadline_in(timeout_s));
+  } catch (const std::exception& e) {
+    throw RpcClientError(std::string("cannot connect to the broker: ") + e.what());
+  }
+  c->endpoint = c->station->name();
+  return RpcClient(std::move(c));
+}
+
 json RpcClient::call(const std::string& method, const json& params, double timeout_s) {
   Connection& c = *connection_;
   const std::int64_t id = c.next_id++;
@@ -243,6 +263,7 @@ std::optional<std::string> RpcClient::read_line(double timeout_s) { return conne
 const std::string& RpcClient::endpoint() const { return connection_->endpoint; }
 
 void RpcClient::close() {
+  connection_->station.reset();
   asio::error_code ignored;
   connection_->socket.close(ignored);
 }

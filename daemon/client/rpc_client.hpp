@@ -1,5 +1,6 @@
 // A blocking JSON-RPC client of cmmd (cmmctl, the integration tests, the benchmark): one call at a
-// time over tcp://HOST:PORT or unix:/PATH, with notifications queued while it waits.
+// time over tcp://HOST:PORT, unix:/PATH or a fleet's MQTT broker, with notifications queued while
+// it waits.
 #pragma once
 
 #include <memory>
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/client/rpc_error.hpp"
+#include "daemon/client/station_link.hpp"
 
 namespace cmm::daemon {
 
@@ -25,6 +27,9 @@ class RpcClient {
  public:
   // endpoint: "tcp://HOST:PORT" (HOST may be [v6]) or "unix:/PATH".
   static RpcClient connect(const std::string& endpoint, double timeout_s = 5);
+  // A station through a fleet's MQTT broker (docs/fleet.md); the token goes with every request, so
+  // server.auth is not needed (and answers with the token's role).
+  static RpcClient connect_station(StationAddress address, double timeout_s = 5);
   RpcClient(RpcClient&&) noexcept;
   RpcClient& operator=(RpcClient&&) noexcept;
   ~RpcClient();

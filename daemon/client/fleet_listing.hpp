@@ -1,0 +1,19 @@
+// `cmmctl fleet`: every station a broker holds a status for (the retained <prefix>/+/status
+// messages, docs/fleet.md), online or not.
+#pragma once
+
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "daemon/client/mqtt_client.hpp"
+
+namespace cmm::daemon {
+
+// The stations' status payloads, sorted by station. Retained messages come right after the
+// subscription; the listing ends once none came for `quiet_s` (or after `max_s`). Throws
+// std::runtime_error when no broker answers within `connect_timeout_s`.
+std::vector<nlohmann::json> list_fleet(MqttConnect broker, const std::string& topic_prefix, double connect_timeout_s = 5,
+                                       double quiet_s = 0.3, double max_s = 5);
+
+}  // namespace cmm::daemon

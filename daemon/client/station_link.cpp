@@ -1,0 +1,96 @@
+// StationLink: one MQTT client, subscribed to its reply topic and the station's job topics.
+#include "daemon/client/station_link.hpp"
+
+#include <unistd.h>
+
+#include <random>
+
+#include <nlohmann/json.hpp>
+
+namespace cmm::daemon {
+
+std::string unique_client_id(const std::string& program) {
+  char host[64] = {};
+  gethostname(host, sizeof host - 1);
+  std::random_device random;
+  char id[160];
+  std::snprintf(id, sizeof id, "%s-%s-%d-%08x", program.c_str(), host, static_cast<int>(getpid()), random());
+  return id;
+}
+
+StationLink::StationLink(StationAddress address, Clock::time_point deadline) : address_(std::move(address)) {
+  MqttConnect& broker = address_.broker;
+  if (broker.client_id.empty()) broker.client_id = unique_client_id("cmmctl");
+  const std::string base = address_.topic_prefix + "/" + address_.station + "/";
+  request_topic_ = base + "api/request";
+  jobs_filter_ = base + "jobs/+/+";
+  // Under the documented ACL only this user may read under clients/<user>/ (docs/fleet.md).
+  reply_topic_ = address_.topic_prefix + "/clients/" + (broker.username.empty() ? "anonymous" : broker.username) + "/" +
+                 broker.client_id + "/reply";
+  MqttCallbacks callbacks;
+  callbacks.connected = [this] {
+    // Subscribed before anything is sent: the broker handles one client's packets in order.
+    client_->subscribe(reply_topic_, 1);
+    client_->subscribe(jobs_filter_, 0);
+    std::lock_guard lock(mutex_);
+    connected_ = true;
+    arrived_.notify_all();
+  };
+  callbacks.message = [this](const MqttMessage& m) {
+    std::string line;
+    if (m.topic == reply_topic_) {
+      line = m.payload;
+    } else {
+      // <base>jobs/<id>/state|progress → the notification a socket client would get.
+      const std::string what = m.topic.substr(m.topic.rfind('/') + 1);
+      if (what != "state" && what != "progress") return;
+      line = nlohmann::json{{"jsonrpc", "2.0"}, {"method", "job." + what}, {"params", nlohmann::json::parse(m.payload, nullptr, false)}}
+                 .dump();
+    }
+    std::lock_guard lock(mutex_);
+    lines_.push_back(std::move(line));
+    arrived_.notify_all();
+  };
+  client_ = std::make_unique<MqttClient>(broker, std::move(callbacks));
+  client_->start();
+  std::unique_lock lock(mutex_);
+  if (!arrived_.wait_until(lock, deadline, [this] { return connected_; }))
+    throw std::runtime_error("no MQTT broker answered at " + client_->broker());
+}
+
+StationLink::~StationLink() { client_->stop(); }
+
+void StationLink::send(std::string_view text) {
+  // A caller's bytes may hold several lines (a raw write): each is one request.
+  while (!text.empty()) {
+    const std::size_t end = text.find('\n');
+    const std::string_view line = text.substr(0, end);
+    text = end == std::string_view::npos ? std::string_view() : text.substr(end + 1);
+    if (line.empty()) continue;
+    MqttMessage m;
+    m.topic = request_topic_;
+    m.payload = std::string(line);
+    m.qos = 1;
+    m.response_topic = reply_topic_;
+    {
+      std::lock_guard lock(mutex_);
+      m.correlation = std::to_string(next_correlation_++);
+    }
+    if (!address_.token.empty()) m.user_properties.emplace_back("token", address_.token);
+    if (!client_->publish(m)) throw std::runtime_error(name() + ": the broker link is down");
+  }
+}
+
+std::optional<std::string> StationLink::next_line(Clock::time_point deadline) {
+  std::unique_lock lock(mutex_);
+  if (!arrived_.wait_until(lock, deadline, [this] { return !lines_.empty(); })) return std::nullopt;
+  std::string line = std::move(lines_.front());
+  lines_.pop_front();
+  return line;
+}
+
+std::string StationLink::name() const {
+  return "mqtt://" + client_->broker() + "/" + address_.topic_prefix + "/" + address_.station;
+}
+
+}  // namespace cmm::daemon

@@ -1,0 +1,83 @@
+// The station on a fleet's MQTT broker (docs/fleet.md): its retained status with a last will, each
+// job's state, progress and result, and JSON-RPC requests on api/request answered on the
+// requester's own response topic. States and results go through the on-disk outbox, so a broker
+// that is away loses none of them and never holds up a job.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "daemon/client/json_rpc.hpp"
+#include "daemon/client/mqtt_client.hpp"
+#include "daemon/mqtt_options.hpp"
+#include "daemon/mqtt_outbox.hpp"
+#include "daemon/token_book.hpp"
+
+namespace cmm::daemon {
+
+struct MqttRequestLimits {
+  std::size_t max_request_bytes = 1 << 20;
+  std::size_t max_batch_entries = 128;
+  std::size_t max_pending = 16;  // requests waiting or running; more are answered server_busy
+};
+
+// The topics of one station.
+struct StationTopics {
+  std::string base;  // <prefix>/<station>/
+  std::string status() const { return base + "status"; }
+  std::string request() const { return base + "api/request"; }
+  std::string job(int id, const std::string& what) const { return base + "jobs/" + std::to_string(id) + "/" + what; }
+};
+StationTopics station_topics(const std::string& prefix, const std::string& station);
+
+class MqttStation {
+ public:
+  // The dispatcher and the token book must outlive the station.
+  MqttStation(MqttOptions options, std::string version, const std::filesystem::path& state_dir,
+              const RpcDispatcher& dispatcher, TokenBook& tokens, MqttRequestLimits limits);
+  ~MqttStation();
+
+  void start();  // connects in the background; returns at once
+  void stop();   // answers nothing more, waits for running requests, leaves with the last will
+
+  // From cmmd's notification fan-out (any thread): machine.state and job.* become topics.
+  void notify(const std::string& method, const nlohmann::json& params);
+  bool connected() const;
+  std::size_t unsent() const { return outbox_.size(); }  // states and results not yet acknowledged
+
+ private:
+  void on_connected();
+  void on_request(const MqttMessage& message);
+  void answer(const MqttMessage& request, Role role);
+  void send_kept(const MqttMessage& message);
+  void publish_status();  // under mutex_
+  void reply(const MqttMessage& request, const nlohmann::json& response);
+
+  MqttOptions options_;
+  std::string version_;
+  StationTopics topics_;
+  const RpcDispatcher& dispatcher_;
+  TokenBook& tokens_;
+  MqttRequestLimits limits_;
+  MqttOutbox outbox_;
+
+  mutable std::mutex mutex_;
+  nlohmann::json machine_ = nullptr;  // the last machine.state
+  nlohmann::json job_ = nullptr;      // {"id", "state"} of the job running, or null
+  std::map<int, std::uint64_t> in_flight_;  // message id → outbox number
+  std::map<int, std::chrono::steady_clock::time_point> last_progress_;
+  std::uint64_t next_context_ = 1;
+
+  struct Requests;
+  std::unique_ptr<Requests> requests_;  // the threads requests run on
+  std::unique_ptr<MqttClient> client_;
+};
+
+}  // namespace cmm::daemon

@@ -1,0 +1,31 @@
+// A real mosquitto on loopback for the fleet tests: users with passwords and the documented ACL
+// (config/mosquitto/cmmd.acl), on a port that stays the same across kill9() and start().
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "child_process.hpp"
+
+namespace cmm::testing {
+
+class BrokerProcess {
+ public:
+  // users: name → password; the ACL file is used as docs/fleet.md documents it.
+  BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users);
+  void start();  // returns once it accepts connections
+  void kill9();
+  int port() const { return port_; }
+
+ private:
+  std::filesystem::path folder_;
+  int port_ = 0;
+  std::unique_ptr<ChildProcess> process_;
+};
+
+// A port nobody listens on now (bound and closed).
+int free_tcp_port();
+
+}  // namespace cmm::testing

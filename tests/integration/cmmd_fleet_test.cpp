@@ -1,0 +1,206 @@
+// A fleet on a real mosquitto (the documented ACL, users with passwords) with two real cmmd stations
+// on the simulator: cmmctl fleet, jobs sent through the broker, token roles, a broker killed in the
+// middle of a job, the last will of a killed station, and what an observer can and cannot read.
+#include <gtest/gtest.h>
+
+#include <csignal>
+
+#include <nlohmann/json.hpp>
+
+#include "broker_process.hpp"
+#include "cmmd_instance.hpp"
+#include "daemon/client/rpc_client.hpp"
+#include "mqtt_listener.hpp"
+#include "tests/daemon/fresh_folder.hpp"
+#include "tests/tools/run_command.hpp"
+
+namespace cmm {
+namespace {
+
+using nlohmann::json;
+
+const std::string kCmmctl = CMMD_BINARY_DIR "/daemon/cmmctl";
+const std::string kOperatorToken = "fleet-operator-token-0123";
+const std::string kObserverToken = "fleet-observer-token-0123";
+const std::map<std::string, std::string> kUsers = {
+    {"alpha", "alpha-pw"}, {"beta", "beta-pw"}, {"ops", "ops-pw"}, {"viewer", "viewer-pw"}};
+
+json station_config(const std::string& station, int broker_port) {
+  return {{"station", station},
+          {"server", {{"tokens", {{{"token", kOperatorToken}, {"role", "operator"}},
+                                  {{"token", kObserverToken}, {"role", "observer"}}}}}},
+          {"http", {{"enabled", false}}},
+          {"mqtt", {{"enabled", true}, {"broker", "127.0.0.1"}, {"port", broker_port}, {"username", station},
+                    {"password", kUsers.at(station)}, {"progress_interval_s", 0.2}}}};
+}
+
+daemon::RpcClient station_client(int broker_port, const std::string& station, const std::string& user,
+                                 const std::string& token) {
+  daemon::StationAddress address;
+  address.broker.host = "127.0.0.1";
+  address.broker.port = broker_port;
+  address.broker.username = user;
+  address.broker.password = kUsers.at(user);
+  address.station = station;
+  address.token = token;
+  return daemon::RpcClient::connect_station(address);
+}
+
+json payload(const daemon::MqttMessage& m) { return json::parse(m.payload); }
+
+bool is_topic(const daemon::MqttMessage& m, const std::string& topic) { return m.topic == topic; }
+
+class Fleet : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = daemon::fresh_folder("fleet");
+    broker_ = std::make_unique<testing::BrokerProcess>(dir_ / "broker", kUsers);
+    broker_->start();
+  }
+
+  std::unique_ptr<testing::CmmdInstance> station(const std::string& name, json machine) {
+    auto cmmd = std::make_unique<testing::CmmdInstance>(dir_ / name, std::move(machine),
+                                                         station_config(name, broker_->port()));
+    cmmd->start();
+    return cmmd;
+  }
+
+  std::string ctl(const std::string& user) const {
+    return kCmmctl + " --broker 127.0.0.1:" + std::to_string(broker_->port()) + " --broker-user " + user +
+           " --broker-password " + kUsers.at(user);
+  }
+
+  std::filesystem::path dir_;
+  std::unique_ptr<testing::BrokerProcess> broker_;
+};
+
+TEST_F(Fleet, ListsBothStationsRunsAJobSentThroughTheBrokerAndHoldsObserversToTheirRole) {
+  auto alpha = station("alpha", testing::timed_sim_block(50));
+  auto beta = station("beta", testing::sample_sim_block());
+  testing::MqttListener viewer(broker_->port(), "viewer", "viewer-pw", {"cmmd/+/status", "cmmd/+/jobs/#"});
+  for (const std::string name : {"alpha", "beta"})
+    viewer.wait_for(name + " online", [&](const auto& m) {
+      return is_topic(m, "cmmd/" + name + "/status") && payload(m).value("online", false) &&
+             payload(m)["machine"].is_object();
+    }, 10);
+
+  auto r = cmm::test::run_command(ctl("viewer") + " fleet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("alpha            online   machine up (enabled)  idle"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("beta             online   machine up (enabled)  idle"), std::string::npos) << r.output;
+
+  // An observer's token over the broker reads but cannot submit.
+  daemon::RpcClient observer = station_client(broker_->port(), "alpha", "viewer", kObserverToken);
+  EXPECT_EQ(observer.call("machine.status").at("driver"), "sim");
+  try {
+    observer.call("job.submit", {{"model", "sha256:00"}});
+    ADD_FAILURE() << "an observer submitted a job through the broker";
+  } catch (const daemon::RpcError& e) {
+    EXPECT_EQ(e.code(), daemon::rpc_code::unauthorized) << e.what();
+  }
+  // No token at all: not even the status.
+  daemon::RpcClient nobody = station_client(broker_->port(), "alpha", "viewer", "");
+  EXPECT_THROW(nobody.call("machine.status"), daemon::RpcError);
+
+  daemon::RpcClient ops = station_client(broker_->port(), "alpha", "ops", kOperatorToken);
+  const int id = testing::submit_quick_job(ops, dir_ / "scan");
+  const std::string jobs = "cmmd/alpha/jobs/" + std::to_string(id) + "/";
+  const daemon::MqttMessage result =
+      viewer.wait_for("result of job " + std::to_string(id), [&](const auto& m) { return is_topic(m, jobs + "result"); }, 120);
+  const json summary = payload(result);
+  EXPECT_EQ(summary.at("state"), "done") << summary.dump();
+  EXPECT_EQ(summary.at("job"), id);
+  EXPECT_EQ(summary.at("station"), "alpha");
+  EXPECT_TRUE(summary.contains("verdict")) << summary.dump();
+  EXPECT_TRUE(result.retain || result.qos == 1);
+  viewer.wait_for("progress of job " + std::to_string(id), [&](const auto& m) { return is_topic(m, jobs + "progress"); }, 1);
+  for (const std::string state : {"planning", "registering", "probing", "done"})
+    viewer.wait_for(state + " of job " + std::to_string(id), [&](const auto& m) {
+      return is_topic(m, jobs + "state") && payload(m).at("state") == state;
+    }, 1);
+
+  // It ran on alpha, not on beta, and cmmctl --station sees it there.
+  EXPECT_EQ(alpha->client().call("job.get", {{"job", id}}).at("state"), "done");
+  EXPECT_TRUE(beta->client().call("job.list").at("jobs").empty());
+  r = cmm::test::run_command(ctl("ops") + " --station alpha --token " + kOperatorToken + " jobs");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("job " + std::to_string(id) + "  done"), std::string::npos) << r.output;
+  r = cmm::test::run_command(ctl("ops") + " --station beta --token " + kOperatorToken + " jobs");
+  EXPECT_NE(r.output.find("no jobs"), std::string::npos) << r.output;
+}
+
+TEST_F(Fleet, ABrokerKilledMidJobChangesNothingAndWhatItMissedIsPublishedOnItsReturn) {
+  auto alpha = station("alpha", testing::timed_sim_block(20));
+  daemon::RpcClient local = alpha->client();
+  local.call("server.subscribe", {{"topics", {"job"}}});
+  const int id = testing::submit_quick_job(local, dir_ / "scan");
+  testing::wait_for_notification(local, "probing", [&](const json& n) {
+    return n["method"] == "job.state" && n["params"]["state"] == "probing";
+  }, 120);
+  broker_->kill9();
+  // The job goes on to its end without the broker; the states it passes meanwhile are noted.
+  std::vector<std::string> missed;
+  for (;;) {
+    const json n = testing::wait_for_notification(local, "the job's end", [&](const json& n) {
+      return n["method"] == "job.state" && n["params"]["job"] == id;
+    }, 300);
+    missed.push_back(n["params"]["state"].get<std::string>());
+    if (missed.back() == "done" || missed.back() == "failed" || missed.back() == "cancelled") break;
+  }
+  EXPECT_EQ(missed.back(), "done");
+  EXPECT_EQ(local.call("job.get", {{"job", id}}).at("state"), "done");
+  const auto outbox = alpha->folder() / "state" / "mqtt-outbox";
+  EXPECT_FALSE(std::filesystem::is_empty(outbox)) << "the missed states are kept on disk";
+
+  broker_->start();
+  testing::MqttListener viewer(broker_->port(), "viewer", "viewer-pw", {"cmmd/alpha/jobs/#"});
+  const std::string jobs = "cmmd/alpha/jobs/" + std::to_string(id) + "/";
+  viewer.wait_for("the result", [&](const auto& m) { return is_topic(m, jobs + "result"); }, 60);
+  for (const std::string& state : missed)
+    viewer.wait_for("missed state " + state, [&](const auto& m) {
+      return is_topic(m, jobs + "state") && payload(m).at("state") == state;
+    }, 10);
+  // Acknowledged, so forgotten.
+  for (int i = 0; i < 500 && !std::filesystem::is_empty(outbox); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_TRUE(std::filesystem::is_empty(outbox));
+}
+
+TEST_F(Fleet, AKilledOrStoppedStationIsMarkedOfflineByItsLastWill) {
+  auto alpha = station("alpha", testing::sample_sim_block());
+  auto beta = station("beta", testing::sample_sim_block());
+  testing::MqttListener viewer(broker_->port(), "viewer", "viewer-pw", {"cmmd/+/status"});
+  auto online = [](const auto& m) { return payload(m).value("online", false); };
+  viewer.wait_for("beta online", [&](const auto& m) { return is_topic(m, "cmmd/beta/status") && online(m); }, 10);
+  beta->kill9();
+  viewer.wait_for("beta's last will", [&](const auto& m) { return is_topic(m, "cmmd/beta/status") && !online(m); }, 10);
+  EXPECT_EQ(alpha->terminate(), 0);
+  viewer.wait_for("alpha offline", [&](const auto& m) { return is_topic(m, "cmmd/alpha/status") && !online(m); }, 10);
+  const auto r = cmm::test::run_command(ctl("viewer") + " fleet");
+  EXPECT_NE(r.output.find("alpha            OFFLINE"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("beta             OFFLINE"), std::string::npos) << r.output;
+}
+
+TEST_F(Fleet, AnObserverUnderTheDocumentedAclReadsNoRequestNorReplyOfAnother) {
+  auto alpha = station("alpha", testing::sample_sim_block());
+  // Everything the observer may ask for, wildcards and all.
+  testing::MqttListener viewer(broker_->port(), "viewer", "viewer-pw",
+                               {"#", "cmmd/#", "cmmd/alpha/api/request", "cmmd/clients/#", "cmmd/clients/ops/#"});
+  viewer.wait_for("alpha's status (what it may read)", [&](const auto& m) { return is_topic(m, "cmmd/alpha/status"); }, 10);
+
+  daemon::RpcClient ops = station_client(broker_->port(), "alpha", "ops", kOperatorToken);
+  EXPECT_EQ(ops.call("machine.status").at("driver"), "sim");
+  EXPECT_TRUE(ops.call("job.list").at("jobs").empty());
+  // A message of the observer's own after ops's: once it is here, anything ops's would have been too.
+  daemon::RpcClient own = station_client(broker_->port(), "alpha", "viewer", kObserverToken);
+  own.call("machine.status");
+  viewer.wait_for("its own reply", [&](const auto& m) { return m.topic.starts_with("cmmd/clients/viewer/"); }, 10);
+  for (const daemon::MqttMessage& m : viewer.messages()) {
+    EXPECT_EQ(m.topic.find("/api/request"), std::string::npos) << "the observer read a request: " << m.topic;
+    EXPECT_EQ(m.payload.find(kOperatorToken), std::string::npos) << m.topic;
+    EXPECT_FALSE(m.topic.starts_with("cmmd/clients/ops/")) << "the observer read ops's reply: " << m.topic;
+  }
+}
+
+}  // namespace
+}  // namespace cmm
