@@ -60,21 +60,11 @@ MqttConnect broker_of(const Global& g) {
 
 void print_fleet(const std::vector<json>& stations, bool raw_json) {
   if (raw_json) {
-    std::cout << json(stations).dump(1) << "\n";
+    std::cout << json(stations).dump(1, ' ', false, json::error_handler_t::replace) << "\n";
     return;
   }
   if (stations.empty()) std::printf("no station has a status on this broker\n");
-  for (const json& s : stations) {
-    const json machine = s.value("machine", json(nullptr)), job = s.value("job", json(nullptr));
-    std::string what = s.value("online", false) ? "online " : "OFFLINE";
-    if (machine.is_object())
-      what.append("  machine ").append(machine.value("link", "?")).append(" (").append(machine.value("lifecycle", "?")).append(")");
-    if (machine.is_object() && machine.value("fault", json(nullptr)).is_object())
-      what.append(" fault ").append(machine["fault"].value("kind", "?"));
-    if (job.is_object()) what.append("  job ").append(std::to_string(job.value("id", 0))).append(" ").append(job.value("state", ""));
-    else if (s.value("online", false)) what.append("  idle");
-    std::printf("%-16s %s\n", s.value("station", "?").c_str(), what.c_str());
-  }
+  for (const json& s : stations) std::printf("%s\n", fleet_line(s).c_str());
 }
 
 std::string default_endpoint() {

@@ -6,6 +6,7 @@
 #include <asio/thread_pool.hpp>
 #include <spdlog/spdlog.h>
 
+#include "daemon/mqtt_request.hpp"
 #include "hal/utc_time.hpp"
 
 namespace cmm::daemon {
@@ -15,12 +16,6 @@ namespace {
 using nlohmann::json;
 
 bool is_end(const std::string& state) { return state == "done" || state == "failed" || state == "cancelled"; }
-
-std::string token_of(const MqttMessage& m) {
-  for (const auto& [name, value] : m.user_properties)
-    if (name == "token") return value;
-  return "";
-}
 
 }  // namespace
 
@@ -166,61 +161,30 @@ void MqttStation::notify(const std::string& method, const json& params) {
 }
 
 void MqttStation::on_request(const MqttMessage& message) {
-  if (message.topic != topics_.request()) return;
-  if (message.response_topic.empty()) {
-    // Replying on a topic everyone reads would show the answer (and what it reveals) to all.
+  if (message.topic != topics_.request() || !requests_ || !requests_->accepting) return;
+  const MqttAdmission admission = admit_mqtt_request(message, limits_.max_request_bytes, tokens_);
+  if (admission.kind == MqttAdmission::Kind::ignore) {
     spdlog::warn("MQTT: a request without a response topic ignored");
     return;
   }
-  if (!requests_ || !requests_->accepting) return;
-  if (message.payload.size() > limits_.max_request_bytes) {
-    reply(message, error_response(nullptr, RpcError(rpc_code::request_too_large,
-                                                    "request of " + std::to_string(message.payload.size()) +
-                                                        " bytes is over the limit",
-                                                    {{"max_request_bytes", limits_.max_request_bytes}})));
-    return;
-  }
-  Role role = Role::none;
-  if (const std::string token = token_of(message); !token.empty()) {
-    const TokenCheck check = tokens_.check(token);
-    if (check.throttled || !check.role) {
-      reply(message, error_response(nullptr, RpcError(rpc_code::auth_failed,
-                                                      check.throttled ? "too many failed tokens: try again later"
-                                                                      : "unknown token",
-                                                      check.throttled ? json{{"retry_after_s", check.retry_after_s}}
-                                                                      : json(nullptr))));
-      return;
-    }
-    role = *check.role;
-  }
+  if (admission.kind == MqttAdmission::Kind::refuse) return reply(message, admission.refusal);
   if (requests_->pending.fetch_add(1) >= limits_.max_pending) {
     requests_->pending.fetch_sub(1);
     reply(message, error_response(nullptr, RpcError(rpc_code::server_busy, "too many MQTT requests waiting",
                                                     {{"max_pending", limits_.max_pending}})));
     return;
   }
-  asio::post(requests_->pool, [this, message, role] {
-    answer(message, role);
+  asio::post(requests_->pool, [this, message, role = admission.role] {
+    std::uint64_t id;
+    {
+      std::lock_guard lock(mutex_);
+      id = next_context_++;
+    }
+    const auto response = answer_mqtt_request(
+        message, role, dispatcher_, {.max_depth = 128, .max_batch_entries = limits_.max_batch_entries}, id);
+    if (response) reply(message, *response);
     requests_->pending.fetch_sub(1);
   });
-}
-
-void MqttStation::answer(const MqttMessage& request, Role role) {
-  std::uint64_t id;
-  {
-    std::lock_guard lock(mutex_);
-    id = next_context_++;
-  }
-  RpcContext ctx(id, "mqtt:" + request.response_topic, role);
-  std::optional<json> response;
-  try {
-    const json message =
-        parse_message(request.payload, {.max_depth = 128, .max_batch_entries = limits_.max_batch_entries});
-    response = dispatcher_.handle(message, ctx);
-  } catch (const RpcError& e) {
-    response = error_response(nullptr, e);
-  }
-  if (response) reply(request, *response);
 }
 
 void MqttStation::reply(const MqttMessage& request, const json& response) {

@@ -55,7 +55,6 @@ class MqttStation {
  private:
   void on_connected();
   void on_request(const MqttMessage& message);
-  void answer(const MqttMessage& request, Role role);
   void send_kept(const MqttMessage& message);
   void publish_status();  // under mutex_
   void reply(const MqttMessage& request, const nlohmann::json& response);

@@ -11,6 +11,52 @@
 
 namespace cmm::daemon {
 
+std::optional<nlohmann::json> fleet_entry(const std::string& topic, const std::string& topic_prefix,
+                                          const std::string& payload) {
+  const std::string head = topic_prefix + "/", tail = "/status";
+  if (topic.size() <= head.size() + tail.size() || !topic.starts_with(head) || !topic.ends_with(tail))
+    return std::nullopt;
+  const std::string station = topic.substr(head.size(), topic.size() - head.size() - tail.size());
+  nlohmann::json status = nlohmann::json::parse(payload, nullptr, false);
+  if (!status.is_object() || station.find('/') != std::string::npos) return std::nullopt;
+  status["station"] = station;  // the topic's word, not the payload's
+  return status;
+}
+
+namespace {
+
+// A member as text, whatever a station (or anyone on the broker) put there.
+std::string text_of(const nlohmann::json& object, const char* key) {
+  if (!object.is_object()) return "?";
+  const auto it = object.find(key);
+  if (it == object.end() || it->is_null()) return "?";
+  return it->is_string() ? it->get<std::string>() : it->dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+const nlohmann::json& member(const nlohmann::json& object, const char* key) {
+  static const nlohmann::json none;
+  if (!object.is_object()) return none;
+  const auto it = object.find(key);
+  return it == object.end() ? none : *it;
+}
+
+}  // namespace
+
+std::string fleet_line(const nlohmann::json& status) {
+  const nlohmann::json &machine = member(status, "machine"), &job = member(status, "job");
+  const bool online = member(status, "online") == true;
+  std::string line = text_of(status, "station");
+  line.resize(std::max<std::size_t>(line.size(), 16), ' ');
+  line.append(online ? " online " : " OFFLINE");
+  if (machine.is_object()) {
+    line.append("  machine ").append(text_of(machine, "link")).append(" (").append(text_of(machine, "lifecycle")).append(")");
+    if (member(machine, "fault").is_object()) line.append(" fault ").append(text_of(member(machine, "fault"), "kind"));
+  }
+  if (job.is_object()) line.append("  job ").append(text_of(job, "id")).append(" ").append(text_of(job, "state"));
+  else if (online) line.append("  idle");
+  return line;
+}
+
 std::vector<nlohmann::json> list_fleet(MqttConnect broker, const std::string& topic_prefix, double connect_timeout_s,
                                        double quiet_s, double max_s) {
   using Clock = std::chrono::steady_clock;
@@ -32,12 +78,11 @@ std::vector<nlohmann::json> list_fleet(MqttConnect broker, const std::string& to
     changed.notify_all();
   };
   callbacks.message = [&](const MqttMessage& m) {
-    nlohmann::json status = nlohmann::json::parse(m.payload, nullptr, false);
-    if (!status.is_object()) return;  // not a station's: ignored, as a reader of a shared broker must
-    const std::string station = m.topic.substr(topic_prefix.size() + 1, m.topic.size() - topic_prefix.size() - 8);
-    status["station"] = station;
+    std::optional<nlohmann::json> status = fleet_entry(m.topic, topic_prefix, m.payload);
+    if (!status) return;  // not a station's: ignored, as a reader of a shared broker must
+    const std::string station = (*status)["station"].get<std::string>();
     std::lock_guard lock(mutex);
-    stations[station] = std::move(status);
+    stations[station] = std::move(*status);
     last = Clock::now();
     changed.notify_all();
   };

@@ -2,6 +2,8 @@
 // messages, docs/fleet.md), online or not.
 #pragma once
 
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -9,6 +11,15 @@
 #include "daemon/client/mqtt_client.hpp"
 
 namespace cmm::daemon {
+
+// A station's status as the listing shows it: the payload with "station" from the topic
+// (<prefix>/<station>/status); nothing for another topic or a payload that is not a JSON object.
+std::optional<nlohmann::json> fleet_entry(const std::string& topic, const std::string& topic_prefix,
+                                          const std::string& payload);
+
+// One line of `cmmctl fleet`: "alpha            online   machine up (enabled)  job 3 probing";
+// members of the wrong type read as text, so no payload can stop the listing.
+std::string fleet_line(const nlohmann::json& status);
 
 // The stations' status payloads, sorted by station. Retained messages come right after the
 // subscription; the listing ends once none came for `quiet_s` (or after `max_s`). Throws

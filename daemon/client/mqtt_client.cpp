@@ -12,6 +12,8 @@
 #include <mutex>
 #include <thread>
 
+#include <spdlog/spdlog.h>
+
 namespace cmm::daemon {
 
 namespace {
@@ -91,7 +93,12 @@ struct MqttCallbacksOf {
       std::free(name);
       std::free(value);
     }
-    c.callbacks_.message(message);
+    // An exception must not unwind into libmosquitto's C loop (it would end the process).
+    try {
+      c.callbacks_.message(message);
+    } catch (const std::exception& e) {
+      spdlog::error("MQTT {}: a message on {} not handled: {}", c.broker_, message.topic, e.what());
+    }
   }
 
   static void publish(mosquitto*, void* self, int mid, int reason, const mosquitto_property*) {

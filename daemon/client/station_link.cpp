@@ -9,6 +9,17 @@
 
 namespace cmm::daemon {
 
+std::optional<std::string> job_notification(const std::string& topic, const std::string& payload) {
+  const std::size_t slash = topic.rfind('/');
+  if (slash == std::string::npos) return std::nullopt;
+  const std::string what = topic.substr(slash + 1);
+  if (what != "state" && what != "progress") return std::nullopt;
+  const nlohmann::json params = nlohmann::json::parse(payload, nullptr, false);
+  if (!params.is_object() || !params.contains("job") || !params["job"].is_number_integer()) return std::nullopt;
+  return nlohmann::json{{"jsonrpc", "2.0"}, {"method", "job." + what}, {"params", params}}.dump(
+      -1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 std::string unique_client_id(const std::string& program) {
   char host[64] = {};
   gethostname(host, sizeof host - 1);
@@ -40,12 +51,10 @@ StationLink::StationLink(StationAddress address, Clock::time_point deadline) : a
     std::string line;
     if (m.topic == reply_topic_) {
       line = m.payload;
+    } else if (auto notification = job_notification(m.topic, m.payload)) {
+      line = std::move(*notification);
     } else {
-      // <base>jobs/<id>/state|progress → the notification a socket client would get.
-      const std::string what = m.topic.substr(m.topic.rfind('/') + 1);
-      if (what != "state" && what != "progress") return;
-      line = nlohmann::json{{"jsonrpc", "2.0"}, {"method", "job." + what}, {"params", nlohmann::json::parse(m.payload, nullptr, false)}}
-                 .dump();
+      return;  // anything else a shared broker carries there is not ours to read
     }
     std::lock_guard lock(mutex_);
     lines_.push_back(std::move(line));

@@ -47,6 +47,11 @@ class StationLink {
   std::unique_ptr<MqttClient> client_;
 };
 
+// The notification line a socket client would get for a message on <base>jobs/<id>/state or
+// .../progress: {"jsonrpc", "method": "job.state"|"job.progress", "params": payload}; nothing for
+// another topic or a payload that is not such an object.
+std::optional<std::string> job_notification(const std::string& topic, const std::string& payload);
+
 // A client id no other cmmctl on the broker has: cmmctl-<host>-<pid>-<random>.
 std::string unique_client_id(const std::string& program);
 

@@ -49,5 +49,30 @@ TEST(DaemonConfig, SerialIsTheGrblDriverAndNoDriverIsTheSimulator) {
   EXPECT_EQ(daemon_config_from_json({{"machine", json::object()}}, "cmmd.json", ".").driver, "sim");
 }
 
+TEST(DaemonConfig, MqttIsOffByDefaultAndItsStationIsTheStationsName) {
+  const DaemonConfig off = daemon_config_from_json(json::object(), "cmmd.json", ".");
+  EXPECT_FALSE(off.mqtt.enabled);
+  const DaemonConfig on = daemon_config_from_json(
+      {{"station", "cell-4"},
+       {"mqtt", {{"enabled", true}, {"broker", "broker.shop"}, {"port", 8883}, {"tls", {{"ca_file", "ca.crt"}}}}}},
+      "cmmd.json", "/etc/cmmd");
+  EXPECT_TRUE(on.mqtt.enabled);
+  EXPECT_EQ(on.mqtt.station, "cell-4");
+  EXPECT_EQ(on.mqtt.topic_prefix, "cmmd");
+  EXPECT_EQ(on.mqtt.tls.ca_file, "/etc/cmmd/ca.crt");  // relative to the config's folder
+}
+
+TEST(DaemonConfig, MqttNamesThatWouldLandUnderOtherTopicsAreProblems) {
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"station", "cell/4"}}}}), "/mqtt/station: must be a topic level"));
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"station", "+"}}}}), "/mqtt/station"));
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"topic_prefix", "plant/#"}}}}), "/mqtt/topic_prefix"));
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"topic_prefix", "/plant"}}}}), "/mqtt/topic_prefix"));
+  EXPECT_TRUE(problems_of({{"mqtt", {{"topic_prefix", "plant/cmm"}}}}).empty());
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"port", 0}}}}), "/mqtt/port"));
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"tls", {{"cert_file", "c.pem"}}}}}}), "/mqtt/tls/ca_file"));
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"tls", {{"ca_file", "ca.pem"}, {"cert_file", "c.pem"}}}}}}), "/mqtt/tls/cert_file"));
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"brokr", "x"}}}}), "/mqtt/brokr"));
+}
+
 }  // namespace
 }  // namespace cmm::daemon

@@ -1,0 +1,81 @@
+// Fuzzes what cmmd and cmmctl read from an MQTT broker, where anyone the broker lets publish can
+// write: a station's api/request (admission by response topic, size and token, then the JSON-RPC
+// answer, as MqttStation runs them), and on cmmctl's side the job topics turned into notifications
+// and the statuses `cmmctl fleet` lists. Input: topic, response topic, token, each ended by '\n',
+// then the payload.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "daemon/client/fleet_listing.hpp"
+#include "daemon/client/station_link.hpp"
+#include "daemon/mqtt_request.hpp"
+#include "fuzz_support.hpp"
+
+namespace {
+
+using namespace cmm::daemon;
+using nlohmann::json;
+
+constexpr std::size_t kMaxRequestBytes = 4096;
+const std::string kOperatorToken = "operator-token-0123456789";
+
+struct Harness {
+  RpcDispatcher dispatcher;
+  // Wrong guesses from earlier inputs must not throttle the later ones.
+  TokenBook tokens{{{"observer-token-0123456789", Role::observer}, {kOperatorToken, Role::operator_}}, 1e15, 1e15};
+
+  Harness() {
+    spdlog::set_level(spdlog::level::off);
+    const auto role_echo = [](const json&, RpcContext& ctx) { return json{{"role", to_string(ctx.role())}}; };
+    dispatcher.add("server.info", {Role::none, Work::quick, role_echo});
+    dispatcher.add("job.list", {Role::observer, Work::quick, role_echo});
+    dispatcher.add("job.submit", {Role::operator_, Work::blocking, role_echo});
+  }
+};
+
+std::string_view next_field(std::string_view& rest) {
+  const std::size_t end = rest.find('\n');
+  const std::string_view field = rest.substr(0, end);
+  rest = end == std::string_view::npos ? std::string_view() : rest.substr(end + 1);
+  return field;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static Harness harness;
+  std::string_view rest = cmm::fuzz::text_of(data, size);
+  MqttMessage m;
+  m.topic = next_field(rest);
+  m.response_topic = next_field(rest);
+  if (const std::string_view token = next_field(rest); !token.empty()) m.user_properties.emplace_back("token", token);
+  m.payload = rest;
+
+  const MqttAdmission a = admit_mqtt_request(m, kMaxRequestBytes, harness.tokens);
+  if (m.response_topic.empty() != (a.kind == MqttAdmission::Kind::ignore)) __builtin_trap();
+  if (a.kind == MqttAdmission::Kind::run) {
+    if (m.payload.size() > kMaxRequestBytes) __builtin_trap();
+    // A role comes only from a configured token.
+    const bool operator_token = !m.user_properties.empty() && m.user_properties[0].second == kOperatorToken;
+    if (a.role == Role::operator_ && !operator_token) __builtin_trap();
+    if (a.role != Role::none && m.user_properties.empty()) __builtin_trap();
+    if (const auto response = answer_mqtt_request(m, a.role, harness.dispatcher, {}, 1)) (void)to_wire(*response);
+  } else if (a.kind == MqttAdmission::Kind::refuse) {
+    if (!a.refusal.contains("error")) __builtin_trap();
+  }
+
+  if (const auto line = job_notification(m.topic, m.payload)) {
+    const json n = json::parse(*line);  // must be JSON a client reads back
+    if (!n.at("params").is_object() || (n.at("method") != "job.state" && n.at("method") != "job.progress")) __builtin_trap();
+  }
+  if (const auto status = fleet_entry(m.topic, "cmmd", m.payload)) {
+    if (status->at("station").get<std::string>().find('/') != std::string::npos) __builtin_trap();
+    (void)fleet_line(*status);
+  }
+  return 0;
+}
