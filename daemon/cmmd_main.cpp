@@ -148,9 +148,12 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
   dispatcher.on_answered([&metrics](const std::string& method, bool error) { metrics->count_request(method, error); });
   if (config.http.enabled) {
     web = std::make_unique<WebServer>(dispatcher, server->tokens(), config.server, config.http, config.state_dir / "jobs");
-    web->serve_metrics([&metrics, &server, &web] {
+    web->serve_metrics([&metrics, &server, &web, &fleet] {
+      std::optional<MqttGauges> mqtt;
+      if (fleet) mqtt = MqttGauges{.link_up = fleet->connected(), .unsent = static_cast<long long>(fleet->unsent())};
       return metrics->text({.socket_clients = static_cast<long long>(server->connection_count()),
-                            .websocket_clients = static_cast<long long>(web->connection_count())});
+                            .websocket_clients = static_cast<long long>(web->connection_count())},
+                           mqtt);
     });
   }
   if (config.mqtt.enabled) {

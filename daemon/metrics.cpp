@@ -90,7 +90,7 @@ void Metrics::count_request(const std::string& method, bool error) {
   if (error) ++errors_[name];
 }
 
-std::string Metrics::text(const MetricsGauges& gauges) const {
+std::string Metrics::text(const MetricsGauges& gauges, const std::optional<MqttGauges>& mqtt) const {
   std::lock_guard lock(mutex_);
   std::string out;
   family(out, "cmmd_touches_total", "counter", "Touches the machine made in jobs.");
@@ -116,6 +116,12 @@ std::string Metrics::text(const MetricsGauges& gauges) const {
   family(out, "cmmd_connected_clients", "gauge", "Open JSON-RPC connections, by transport.");
   out += fmt::format("cmmd_connected_clients{{transport=\"socket\"}} {}\ncmmd_connected_clients{{transport=\"websocket\"}} {}\n",
                      gauges.socket_clients, gauges.websocket_clients);
+  if (mqtt) {
+    family(out, "cmmd_mqtt_link_up", "gauge", "1 when the link to the fleet's MQTT broker is up.");
+    out += fmt::format("cmmd_mqtt_link_up {}\n", mqtt->link_up ? 1 : 0);
+    family(out, "cmmd_mqtt_unsent_messages", "gauge", "Job states and results kept until the broker acknowledges them.");
+    out += fmt::format("cmmd_mqtt_unsent_messages {}\n", mqtt->unsent);
+  }
   return out;
 }
 

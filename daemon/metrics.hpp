@@ -6,6 +6,7 @@
 #include <chrono>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -30,6 +31,13 @@ struct MetricsGauges {
   long long websocket_clients = 0;  // the dashboard's
 };
 
+// The fleet broker's link, with mqtt.enabled only (docs/fleet.md): up, and the job states and
+// results waiting in the outbox for it.
+struct MqttGauges {
+  bool link_up = false;
+  long long unsent = 0;
+};
+
 class Metrics {
  public:
   using Clock = std::chrono::steady_clock;
@@ -43,7 +51,7 @@ class Metrics {
   // One answered JSON-RPC request; `method` as the request named it ("" when it named none).
   void count_request(const std::string& method, bool error);
 
-  std::string text(const MetricsGauges& gauges) const;
+  std::string text(const MetricsGauges& gauges, const std::optional<MqttGauges>& mqtt = std::nullopt) const;
 
  private:
   mutable std::mutex mutex_;

@@ -60,6 +60,13 @@ MqttStation::MqttStation(MqttOptions options, std::string version, const std::fi
     spdlog::warn("MQTT {}: link down ({}); {} state(s) and result(s) kept until it returns", client_->broker(), why,
                  outbox_.size());
   };
+  callbacks.failed = [this](const std::string& why) {
+    // Once per reason: a broker away for a night would otherwise write a line every 5 s.
+    std::lock_guard lock(mutex_);
+    if (why == last_failure_) return;
+    last_failure_ = why;
+    spdlog::warn("MQTT {}: cannot connect ({}); trying again every few seconds", client_->broker(), why);
+  };
   callbacks.message = [this](const MqttMessage& m) { on_request(m); };
   callbacks.published = [this](int mid) {
     std::lock_guard lock(mutex_);
@@ -92,6 +99,7 @@ void MqttStation::on_connected() {
   spdlog::info("MQTT {}: connected as station {}", client_->broker(), options_.station);
   client_->subscribe(topics_.request(), 1);
   std::lock_guard lock(mutex_);
+  last_failure_.clear();
   publish_status();
   // Whatever was waiting, oldest first; a message already sent but not acknowledged goes again
   // (QoS 1 is at least once: a reader keys states by job and time).

@@ -73,6 +73,7 @@ class MqttStation {
   std::map<int, std::uint64_t> in_flight_;  // message id → outbox number
   std::map<int, std::chrono::steady_clock::time_point> last_progress_;
   std::uint64_t next_context_ = 1;
+  std::string last_failure_;  // the last reason a connect failed, logged once
 
   struct Requests;
   std::unique_ptr<Requests> requests_;  // the threads requests run on

@@ -64,6 +64,7 @@ std::vector<nlohmann::json> list_fleet(MqttConnect broker, const std::string& to
   std::mutex mutex;
   std::condition_variable changed;
   bool connected = false;
+  std::string failure;  // the first attempt's, if it failed
   Clock::time_point last = Clock::now();
   std::map<std::string, nlohmann::json> stations;
   const std::string filter = topic_prefix + "/+/status";
@@ -75,6 +76,11 @@ std::vector<nlohmann::json> list_fleet(MqttConnect broker, const std::string& to
     std::lock_guard lock(mutex);
     connected = true;
     last = Clock::now();
+    changed.notify_all();
+  };
+  callbacks.failed = [&](const std::string& why) {
+    std::lock_guard lock(mutex);
+    if (failure.empty()) failure = why;
     changed.notify_all();
   };
   callbacks.message = [&](const MqttMessage& m) {
@@ -90,8 +96,9 @@ std::vector<nlohmann::json> list_fleet(MqttConnect broker, const std::string& to
   self = &client;
   client.start();
   std::unique_lock lock(mutex);
-  if (!changed.wait_for(lock, seconds(connect_timeout_s), [&] { return connected; }))
-    throw std::runtime_error("no MQTT broker answered at " + client.broker());
+  if (!changed.wait_for(lock, seconds(connect_timeout_s), [&] { return connected || !failure.empty(); }) || !connected)
+    throw std::runtime_error("cannot reach the MQTT broker at " + client.broker() + ": " +
+                             (failure.empty() ? "no answer" : failure));
   const Clock::time_point end = Clock::now() + seconds(max_s);
   while (Clock::now() < end) {
     const Clock::time_point quiet_end = last + seconds(quiet_s);

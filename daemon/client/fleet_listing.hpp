@@ -23,7 +23,8 @@ std::string fleet_line(const nlohmann::json& status);
 
 // The stations' status payloads, sorted by station. Retained messages come right after the
 // subscription; the listing ends once none came for `quiet_s` (or after `max_s`). Throws
-// std::runtime_error when no broker answers within `connect_timeout_s`.
+// std::runtime_error naming why when the first attempt to connect fails (refused, TLS, a wrong
+// password) or no broker answers within `connect_timeout_s`.
 std::vector<nlohmann::json> list_fleet(MqttConnect broker, const std::string& topic_prefix, double connect_timeout_s = 5,
                                        double quiet_s = 0.3, double max_s = 5);
 

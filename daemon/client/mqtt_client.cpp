@@ -52,7 +52,7 @@ struct MqttCallbacksOf {
   static void connect(mosquitto*, void* self, int rc, int, const mosquitto_property*) {
     auto& c = *static_cast<MqttClient*>(self);
     if (rc != 0) {
-      if (c.callbacks_.disconnected) c.callbacks_.disconnected(std::string("refused: ") + mosquitto_reason_string(rc));
+      if (c.callbacks_.failed) c.callbacks_.failed(std::string("refused: ") + mosquitto_reason_string(rc));
       return;
     }
     c.connected_ = true;
@@ -153,9 +153,11 @@ void MqttClient::start() {
   if (started_) return;
   started_ = true;
   stopping_ = false;
+  leaving_ = false;
   // A refusal here (nobody listening yet) is the loop's to retry; only a bad argument is ours.
   const int rc = mosquitto_connect_bind_async(mosq_, connect_.host.c_str(), connect_.port, connect_.keepalive_s, nullptr);
   if (rc == MOSQ_ERR_INVAL) throw MqttError("MQTT " + broker_ + ": invalid host or port");
+  if (rc != MOSQ_ERR_SUCCESS && callbacks_.failed) callbacks_.failed(error_text(rc));
   thread_ = std::thread([this] { loop(); });
 }
 
@@ -168,6 +170,7 @@ void MqttClient::loop() {
       continue;
     }
     if (stopping_) break;
+    if (!connected_ && !leaving_ && callbacks_.failed) callbacks_.failed(error_text(rc));
     // Down: wait (in short steps, so stop() is quick), then try again.
     for (auto waited = std::chrono::milliseconds(0); waited < delay && !stopping_; waited += std::chrono::milliseconds(50))
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -178,6 +181,7 @@ void MqttClient::loop() {
 
 void MqttClient::stop() {
   if (!started_) return;
+  leaving_ = true;  // the link going down from here on is ours, not a failure to report
   // Reason 4, "disconnect with will message": the broker still publishes the last will, so a
   // station stopped on purpose reads as offline as one that died.
   if (connected_) {

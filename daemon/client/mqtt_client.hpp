@@ -54,6 +54,9 @@ struct MqttCallbacks {
   std::function<void(const std::string& why)> disconnected;
   std::function<void(const MqttMessage&)> message;
   std::function<void(int message_id)> published;  // QoS 1: the broker acknowledged it
+  // An attempt to connect failed (refused, TLS, DNS); the client tries again unless stopped. A
+  // one-shot tool gives up here with the reason; a station waits.
+  std::function<void(const std::string& why)> failed;
 };
 
 class MqttClient {
@@ -86,7 +89,7 @@ class MqttClient {
   void loop();
 
   bool started_ = false;
-  std::atomic<bool> connected_{false}, stopping_{false};
+  std::atomic<bool> connected_{false}, stopping_{false}, leaving_{false};
   std::thread thread_;
 };
 

@@ -213,7 +213,7 @@ RpcClient RpcClient::connect_station(StationAddress address, double timeout_s) {
   try {
     c->station = std::make_unique<StationLink>(std::move(address), deadline_in(timeout_s));
   } catch (const std::exception& e) {
-    throw RpcClientError(std::string("cannot connect to the broker: ") + e.what());
+    throw RpcClientError(e.what());
   }
   c->endpoint = c->station->name();
   return RpcClient(std::move(c));

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -35,6 +36,7 @@ StationLink::StationLink(StationAddress address, Clock::time_point deadline) : a
   const std::string base = address_.topic_prefix + "/" + address_.station + "/";
   request_topic_ = base + "api/request";
   jobs_filter_ = base + "jobs/+/+";
+  status_topic_ = base + "status";
   // Under the documented ACL only this user may read under clients/<user>/ (docs/fleet.md).
   reply_topic_ = address_.topic_prefix + "/clients/" + (broker.username.empty() ? "anonymous" : broker.username) + "/" +
                  broker.client_id + "/reply";
@@ -43,12 +45,26 @@ StationLink::StationLink(StationAddress address, Clock::time_point deadline) : a
     // Subscribed before anything is sent: the broker handles one client's packets in order.
     client_->subscribe(reply_topic_, 1);
     client_->subscribe(jobs_filter_, 0);
+    client_->subscribe(status_topic_, 1);
     std::lock_guard lock(mutex_);
     connected_ = true;
     arrived_.notify_all();
   };
+  callbacks.failed = [this](const std::string& why) {
+    std::lock_guard lock(mutex_);
+    if (failure_.empty()) failure_ = why;
+    arrived_.notify_all();
+  };
   callbacks.message = [this](const MqttMessage& m) {
     std::string line;
+    if (m.topic == status_topic_) {
+      const nlohmann::json status = nlohmann::json::parse(m.payload, nullptr, false);
+      std::lock_guard lock(mutex_);
+      online_ = status.is_object() && status.value("online", nlohmann::json(false)) == true;
+      status_seen_ = true;
+      arrived_.notify_all();
+      return;
+    }
     if (m.topic == reply_topic_) {
       line = m.payload;
     } else if (auto notification = job_notification(m.topic, m.payload)) {
@@ -63,8 +79,24 @@ StationLink::StationLink(StationAddress address, Clock::time_point deadline) : a
   client_ = std::make_unique<MqttClient>(broker, std::move(callbacks));
   client_->start();
   std::unique_lock lock(mutex_);
-  if (!arrived_.wait_until(lock, deadline, [this] { return connected_; }))
-    throw std::runtime_error("no MQTT broker answered at " + client_->broker());
+  if (!arrived_.wait_until(lock, deadline, [this] { return connected_ || !failure_.empty(); }) || !connected_) {
+    const std::string why = failure_.empty() ? "no answer" : failure_;
+    lock.unlock();
+    client_->stop();
+    throw std::runtime_error("cannot reach the MQTT broker at " + client_->broker() + ": " + why);
+  }
+  // A station's retained status comes right after the subscription: without one there is no such
+  // station on this broker, and an offline one cannot answer. Either is said now, not after a
+  // call's timeout.
+  arrived_.wait_until(lock, std::min(deadline, Clock::now() + std::chrono::seconds(1)), [this] { return status_seen_; });
+  if (!status_seen_ || !online_) {
+    const bool seen = status_seen_;
+    lock.unlock();
+    client_->stop();
+    throw std::runtime_error(seen ? "station " + address_.station + " is offline on " + client_->broker()
+                                  : "no station " + address_.station + " on the broker at " + client_->broker() +
+                                        " (cmmctl fleet lists them)");
+  }
 }
 
 StationLink::~StationLink() { client_->stop(); }

@@ -27,8 +27,9 @@ struct StationAddress {
 class StationLink {
  public:
   using Clock = std::chrono::steady_clock;
-  // Waits for the broker until `deadline`; throws MqttError (settings) or std::runtime_error
-  // (no broker by then).
+  // Waits for the broker and the station's status until `deadline`; throws MqttError (settings)
+  // or std::runtime_error (the first attempt failed, with why; no answer by then; no such station;
+  // the station offline).
   StationLink(StationAddress address, Clock::time_point deadline);
   ~StationLink();
 
@@ -38,11 +39,13 @@ class StationLink {
 
  private:
   StationAddress address_;
-  std::string reply_topic_, request_topic_, jobs_filter_;
+  std::string reply_topic_, request_topic_, jobs_filter_, status_topic_;
   std::mutex mutex_;
   std::condition_variable arrived_;
   std::deque<std::string> lines_;
   bool connected_ = false;
+  std::string failure_;  // why the first attempt to connect failed
+  bool status_seen_ = false, online_ = false;  // the station's retained status
   std::uint64_t next_correlation_ = 1;
   std::unique_ptr<MqttClient> client_;
 };

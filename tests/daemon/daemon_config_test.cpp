@@ -69,6 +69,7 @@ TEST(DaemonConfig, MqttNamesThatWouldLandUnderOtherTopicsAreProblems) {
   EXPECT_TRUE(names(problems_of({{"mqtt", {{"topic_prefix", "/plant"}}}}), "/mqtt/topic_prefix"));
   EXPECT_TRUE(problems_of({{"mqtt", {{"topic_prefix", "plant/cmm"}}}}).empty());
   EXPECT_TRUE(names(problems_of({{"mqtt", {{"port", 0}}}}), "/mqtt/port"));
+  EXPECT_TRUE(names(problems_of({{"mqtt", {{"progress_interval_s", 0}}}}), "/mqtt/progress_interval_s: must be in [0.1"));
   EXPECT_TRUE(names(problems_of({{"mqtt", {{"tls", {{"cert_file", "c.pem"}}}}}}), "/mqtt/tls/ca_file"));
   EXPECT_TRUE(names(problems_of({{"mqtt", {{"tls", {{"ca_file", "ca.pem"}, {"cert_file", "c.pem"}}}}}}), "/mqtt/tls/cert_file"));
   EXPECT_TRUE(names(problems_of({{"mqtt", {{"brokr", "x"}}}}), "/mqtt/brokr"));

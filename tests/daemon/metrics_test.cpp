@@ -71,5 +71,13 @@ TEST(Metrics, RequestsOfNoSuchMethodShareOneLabel) {
   EXPECT_EQ(text.find("made.up"), std::string::npos);
 }
 
+TEST(Metrics, TheBrokersLinkAndUnsentMessagesOnlyWithMqtt) {
+  Metrics m({"server.info"});
+  EXPECT_EQ(m.text({}).find("cmmd_mqtt"), std::string::npos);
+  const std::string text = m.text({}, MqttGauges{.link_up = false, .unsent = 3});
+  EXPECT_NE(text.find("# TYPE cmmd_mqtt_link_up gauge\ncmmd_mqtt_link_up 0\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("cmmd_mqtt_unsent_messages 3\n"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace cmm::daemon

@@ -22,7 +22,21 @@ int free_tcp_port() {
   return acceptor.local_endpoint().port();
 }
 
-BrokerProcess::BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users)
+void make_test_certificates(const std::filesystem::path& folder, const std::string& name) {
+  std::filesystem::create_directories(folder);
+  const std::string d = folder.string() + "/";
+  std::ofstream(folder / "san.ext") << "subjectAltName=IP:127.0.0.1,DNS:localhost\n";
+  for (const std::string& command :
+       {"openssl req -x509 -newkey rsa:2048 -nodes -days 2 -subj /CN=cmmd-test-ca -keyout " + d + "ca.key -out " + d + "ca.crt",
+        "openssl req -newkey rsa:2048 -nodes -subj /CN=localhost -keyout " + d + name + ".key -out " + d + name + ".csr",
+        "openssl x509 -req -days 2 -in " + d + name + ".csr -CA " + d + "ca.crt -CAkey " + d + "ca.key -CAcreateserial -out " +
+            d + name + ".crt -extfile " + d + "san.ext"}) {
+    const auto r = cmm::test::run_command(command + " 2>&1");
+    if (r.exit_code != 0) throw std::runtime_error(command + ": " + r.output);
+  }
+}
+
+BrokerProcess::BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users, bool tls)
     : folder_(std::move(folder)), port_(free_tcp_port()) {
   std::filesystem::create_directories(folder_);
   const std::filesystem::path passwords = folder_ / "passwd";
@@ -40,6 +54,12 @@ BrokerProcess::BrokerProcess(std::filesystem::path folder, const std::map<std::s
                                             << "log_dest file " << (folder_ / "mosquitto.log").string() << "\n"
                                             // Started as root it would become "mosquitto", who cannot write here.
                                             << "user " << getpwuid(geteuid())->pw_name << "\n";
+  if (tls) {
+    make_test_certificates(folder_, "broker");
+    std::ofstream(folder_ / "mosquitto.conf", std::ios::app) << "cafile " << tls_ca().string() << "\n"
+                                                              << "certfile " << (folder_ / "broker.crt").string() << "\n"
+                                                              << "keyfile " << (folder_ / "broker.key").string() << "\n";
+  }
 }
 
 void BrokerProcess::start() {

@@ -13,17 +13,23 @@ namespace cmm::testing {
 
 class BrokerProcess {
  public:
-  // users: name → password; the ACL file is used as docs/fleet.md documents it.
-  BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users);
+  // users: name → password; the ACL file is used as docs/fleet.md documents it. With `tls`, the
+  // listener takes TLS only, with a certificate for 127.0.0.1 signed by the CA of tls_ca().
+  BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users, bool tls = false);
   void start();  // returns once it accepts connections
   void kill9();
   int port() const { return port_; }
+  std::filesystem::path tls_ca() const { return folder_ / "ca.crt"; }
 
  private:
   std::filesystem::path folder_;
   int port_ = 0;
   std::unique_ptr<ChildProcess> process_;
 };
+
+// A CA (ca.crt, ca.key) in `folder` and a certificate for 127.0.0.1 and localhost signed by it
+// (`name`.crt, `name`.key), made with the openssl command.
+void make_test_certificates(const std::filesystem::path& folder, const std::string& name);
 
 // A port nobody listens on now (bound and closed).
 int free_tcp_port();

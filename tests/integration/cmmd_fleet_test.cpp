@@ -202,5 +202,38 @@ TEST_F(Fleet, AnObserverUnderTheDocumentedAclReadsNoRequestNorReplyOfAnother) {
   }
 }
 
+// The documented set-up: the broker takes TLS only. cmmd and cmmctl verify its certificate against
+// the CA they are given; a client without it, or with another CA, gets no link.
+TEST(FleetTls, StationsAndCmmctlTalkTlsAndAnotherCaIsRefused) {
+  const auto dir = daemon::fresh_folder("fleet-tls");
+  testing::BrokerProcess broker(dir / "broker", kUsers, true);
+  broker.start();
+  json config = station_config("alpha", broker.port());
+  config["mqtt"]["tls"] = {{"ca_file", broker.tls_ca().string()}};
+  testing::CmmdInstance alpha(dir / "alpha", testing::sample_sim_block(), config);
+  alpha.start();
+  const std::string ctl = kCmmctl + " --broker 127.0.0.1:" + std::to_string(broker.port()) +
+                          " --broker-user viewer --broker-password viewer-pw";
+  auto r = cmm::test::run_command(ctl + " --broker-ca " + broker.tls_ca().string() + " fleet");
+  for (int i = 0; i < 30 && r.output.find("alpha            online") == std::string::npos; ++i)
+    r = cmm::test::run_command(ctl + " --broker-ca " + broker.tls_ca().string() + " fleet");  // alpha still connecting
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("alpha            online"), std::string::npos) << r.output;
+
+  r = cmm::test::run_command(ctl + " fleet 2>&1");  // plain MQTT to a TLS port
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cannot reach the MQTT broker at 127.0.0.1:" + std::to_string(broker.port())), std::string::npos)
+      << r.output;
+  testing::make_test_certificates(dir / "other", "client");
+  r = cmm::test::run_command(ctl + " --broker-ca " + (dir / "other" / "ca.crt").string() + " fleet 2>&1");
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("TLS"), std::string::npos) << r.output;
+  // A wrong password is said as such, at once.
+  r = cmm::test::run_command(kCmmctl + " --broker 127.0.0.1:" + std::to_string(broker.port()) +
+                             " --broker-user viewer --broker-password wrong --broker-ca " + broker.tls_ca().string() +
+                             " fleet 2>&1");
+  EXPECT_NE(r.output.find("refused: "), std::string::npos) << r.output;
+}
+
 }  // namespace
 }  // namespace cmm
