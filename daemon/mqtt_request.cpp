@@ -3,9 +3,13 @@
 
 namespace cmm::daemon {
 
-MqttAdmission admit_mqtt_request(const MqttMessage& request, std::size_t max_request_bytes, TokenBook& tokens) {
+MqttAdmission admit_mqtt_request(const MqttMessage& request, const std::string& reply_prefix,
+                                 std::size_t max_request_bytes, TokenBook& tokens) {
   MqttAdmission a;
-  if (request.response_topic.empty()) return a;
+  const std::string& reply = request.response_topic;
+  if (reply.size() <= reply_prefix.size() || !reply.starts_with(reply_prefix) ||
+      reply.find_first_of("+#") != std::string::npos)
+    return a;
   a.kind = MqttAdmission::Kind::refuse;
   if (request.payload.size() > max_request_bytes) {
     a.refusal = error_response(nullptr, RpcError(rpc_code::request_too_large,

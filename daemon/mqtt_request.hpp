@@ -16,7 +16,9 @@ namespace cmm::daemon {
 
 struct MqttAdmission {
   enum class Kind {
-    ignore,  // no response topic: an answer on a topic everyone reads would show it to all
+    // No response topic, or one outside the replies' prefix: an answer on a topic everyone reads
+    // would show it to all, and one on the station's own topics would pass for its status or results.
+    ignore,
     refuse,  // answered at once with `refusal` (too large, a wrong token)
     run,     // to be answered with `role`
   };
@@ -25,8 +27,10 @@ struct MqttAdmission {
   Role role = Role::none;
 };
 
-// The token travels as the user property "token"; none is role none (server.info only).
-MqttAdmission admit_mqtt_request(const MqttMessage& request, std::size_t max_request_bytes, TokenBook& tokens);
+// The token travels as the user property "token"; none is role none (server.info only). Replies go
+// only to response topics under `reply_prefix` (<prefix>/clients/, docs/fleet.md) without wildcards.
+MqttAdmission admit_mqtt_request(const MqttMessage& request, const std::string& reply_prefix,
+                                 std::size_t max_request_bytes, TokenBook& tokens);
 
 // The JSON-RPC response to an admitted request in a context of its own (`context_id`, for logs),
 // or nothing for a notification. Never throws for what the payload holds.

@@ -20,7 +20,7 @@ bool is_end(const std::string& state) { return state == "done" || state == "fail
 }  // namespace
 
 StationTopics station_topics(const std::string& prefix, const std::string& station) {
-  return {prefix + "/" + station + "/"};
+  return {prefix + "/" + station + "/", prefix + "/clients/"};
 }
 
 struct MqttStation::Requests {
@@ -170,9 +170,13 @@ void MqttStation::notify(const std::string& method, const json& params) {
 
 void MqttStation::on_request(const MqttMessage& message) {
   if (message.topic != topics_.request() || !requests_ || !requests_->accepting) return;
-  const MqttAdmission admission = admit_mqtt_request(message, limits_.max_request_bytes, tokens_);
+  const MqttAdmission admission = admit_mqtt_request(message, topics_.replies, limits_.max_request_bytes, tokens_);
   if (admission.kind == MqttAdmission::Kind::ignore) {
-    spdlog::warn("MQTT: a request without a response topic ignored");
+    std::lock_guard lock(mutex_);
+    if (!ignored_logged_)
+      spdlog::warn("MQTT: a request with response topic \"{}\" ignored: replies go only under {} (said once)",
+                   message.response_topic, topics_.replies);
+    ignored_logged_ = true;
     return;
   }
   if (admission.kind == MqttAdmission::Kind::refuse) return reply(message, admission.refusal);

@@ -33,6 +33,7 @@ struct StationTopics {
   std::string base;  // <prefix>/<station>/
   std::string status() const { return base + "status"; }
   std::string request() const { return base + "api/request"; }
+  std::string replies;  // <prefix>/clients/: where requesters' response topics must lie
   std::string job(int id, const std::string& what) const { return base + "jobs/" + std::to_string(id) + "/" + what; }
 };
 StationTopics station_topics(const std::string& prefix, const std::string& station);
@@ -74,6 +75,7 @@ class MqttStation {
   std::map<int, std::chrono::steady_clock::time_point> last_progress_;
   std::uint64_t next_context_ = 1;
   std::string last_failure_;  // the last reason a connect failed, logged once
+  bool ignored_logged_ = false;  // a request without a usable response topic: said once, not per message
 
   struct Requests;
   std::unique_ptr<Requests> requests_;  // the threads requests run on

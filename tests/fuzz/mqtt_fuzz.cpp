@@ -1,8 +1,8 @@
 // Fuzzes what cmmd and cmmctl read from an MQTT broker, where anyone the broker lets publish can
 // write: a station's api/request (admission by response topic, size and token, then the JSON-RPC
-// answer, as MqttStation runs them), and on cmmctl's side the job topics turned into notifications
-// and the statuses `cmmctl fleet` lists. Input: topic, response topic, token, each ended by '\n',
-// then the payload.
+// answer, as MqttStation runs them; replies only under cmmd/clients/), and on cmmctl's side the
+// job topics turned into notifications and the statuses `cmmctl fleet` lists. Input: topic,
+// response topic, token, each ended by '\n', then the payload.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -56,8 +56,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (const std::string_view token = next_field(rest); !token.empty()) m.user_properties.emplace_back("token", token);
   m.payload = rest;
 
-  const MqttAdmission a = admit_mqtt_request(m, kMaxRequestBytes, harness.tokens);
-  if (m.response_topic.empty() != (a.kind == MqttAdmission::Kind::ignore)) __builtin_trap();
+  const MqttAdmission a = admit_mqtt_request(m, "cmmd/clients/", kMaxRequestBytes, harness.tokens);
+  // Answered only under the replies' prefix, never on a wildcard: nothing a requester names makes
+  // the station write onto its own status or results.
+  if (a.kind != MqttAdmission::Kind::ignore &&
+      (!m.response_topic.starts_with("cmmd/clients/") || m.response_topic.find_first_of("+#") != std::string::npos))
+    __builtin_trap();
   if (a.kind == MqttAdmission::Kind::run) {
     if (m.payload.size() > kMaxRequestBytes) __builtin_trap();
     // A role comes only from a configured token.

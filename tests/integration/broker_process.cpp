@@ -51,6 +51,7 @@ BrokerProcess::BrokerProcess(std::filesystem::path folder, const std::map<std::s
                                             << "acl_file " << CMMD_SOURCE_DIR << "/config/mosquitto/cmmd.acl\n"
                                             << "listener " << port_ << " 127.0.0.1\n"
                                             << "persistence false\n"
+                                            << "max_packet_size 8388608\n"
                                             << "log_dest file " << (folder_ / "mosquitto.log").string() << "\n"
                                             // Started as root it would become "mosquitto", who cannot write here.
                                             << "user " << getpwuid(geteuid())->pw_name << "\n";
