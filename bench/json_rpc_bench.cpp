@@ -33,6 +33,8 @@ using asio::ip::tcp;
 // The echoed params: a sequence number and 64 bytes of text, about what job.get asks.
 json echo_params(std::int64_t seq) { return {{"seq", seq}, {"text", std::string(64, 'x')}}; }
 
+const std::string kBenchToken = "json-rpc-bench-observer-token";
+
 // cmmd's server on its own io thread, as cmmd runs it, with one fast method.
 struct RpcRig {
   asio::io_context io;
@@ -44,6 +46,7 @@ struct RpcRig {
     dispatcher.add("echo", {Role::observer, Work::quick, [](const json& p, RpcContext&) { return p; }});
     ServerOptions options;
     options.tcp_port = 0;
+    options.tokens = {{kBenchToken, Role::observer}};  // TCP is a role only by a token
     server.emplace(io, dispatcher, options);
     server->start();
     thread = std::thread([this] { io.run(); });
@@ -105,8 +108,14 @@ BareEchoRig& bare_rig() {
   return rig;
 }
 
-struct RpcEchoClient {
+RpcClient authenticated_client() {
   RpcClient client = RpcClient::connect("tcp://127.0.0.1:" + std::to_string(rpc_rig().server->tcp_port()), 10);
+  client.call("server.auth", {{"token", kBenchToken}});
+  return client;
+}
+
+struct RpcEchoClient {
+  RpcClient client = authenticated_client();
   std::size_t request_bytes = to_wire(json{{"jsonrpc", "2.0"}, {"id", 1}, {"method", "echo"}, {"params", echo_params(1)}}).size() + 1;
   bool round_trip(std::int64_t seq) { return client.call("echo", echo_params(seq)).at("seq") == seq; }
 };

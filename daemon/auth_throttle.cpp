@@ -1,4 +1,4 @@
-// The token bucket that throttles server.auth guesses.
+// The token bucket that throttles one source's wrong tokens.
 #include "daemon/auth_throttle.hpp"
 
 #include <algorithm>
@@ -22,6 +22,11 @@ bool AuthThrottle::allow(Clock::time_point now) {
 void AuthThrottle::record_failure(Clock::time_point now) {
   refill(now);
   allowance_ = std::max(0.0, allowance_ - 1);
+}
+
+bool AuthThrottle::full(Clock::time_point now) const {
+  const double elapsed = std::chrono::duration<double>(now - last_).count();
+  return allowance_ + std::max(0.0, elapsed) * per_second_ >= burst_;
 }
 
 double AuthThrottle::retry_after_s() const { return std::max(0.0, (1 - allowance_) / per_second_); }

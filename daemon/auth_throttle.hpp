@@ -1,6 +1,6 @@
-// How fast server.auth may fail: each failed guess takes one from an allowance of `burst` that
-// refills at `per_second`; while it is used up, server.auth is refused without comparing the token,
-// so guessing runs no faster than that and the log says so once, not once per guess.
+// How fast one source's tokens may fail: each wrong token takes one from an allowance of `burst`
+// that refills at `per_second`; while it is used up, the source's wrong tokens are answered as
+// throttled and the log says so once, not once per guess (TokenBook).
 #pragma once
 
 #include <chrono>
@@ -18,6 +18,8 @@ class AuthThrottle {
   void record_failure(Clock::time_point now = Clock::now());
   // Until the next guess is allowed, after allow() said no.
   double retry_after_s() const;
+  // Whether the allowance is whole again (as of the last call): such a source can be forgotten.
+  bool full(Clock::time_point now = Clock::now()) const;
 
  private:
   void refill(Clock::time_point now);

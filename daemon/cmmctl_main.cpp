@@ -31,7 +31,7 @@ using nlohmann::json;
 
 struct Global {
   std::string endpoint;
-  std::string token;
+  std::string token, token_file;
   bool raw_json = false;
   // A fleet's broker (docs/fleet.md): `fleet` reads it, --station sends every command through it.
   std::string broker, broker_user, broker_password, topic_prefix = "cmmd", station;
@@ -73,12 +73,43 @@ std::string default_endpoint() {
   return "tcp://127.0.0.1:7620";
 }
 
+// The station's operator token cmmd keeps for local tools (docs/api.md, Access): readable by the
+// members of cmmd's group.
+constexpr const char* kStationTokenFile = "/var/lib/cmmd/operator.token";
+
+// Whether a tcp:// endpoint is this host's: only there may the station token file be sent unasked.
+bool loopback_endpoint(const std::string& endpoint) {
+  std::string host = endpoint.substr(std::string("tcp://").size());
+  host = host.substr(0, host.rfind(':'));
+  return host == "localhost" || host == "[::1]" || host == "::1" || host.starts_with("127.");
+}
+
+// --token or $CMMD_TOKEN; else the first line of --token-file, $CMMD_TOKEN_FILE or, for TCP to this
+// host, the station token file when it can be read. "" when there is none.
+std::string token_of(const Global& g, bool local_tcp) {
+  if (std::string token = from_env(g.token, "CMMD_TOKEN"); !token.empty()) return token;
+  std::string file = from_env(g.token_file, "CMMD_TOKEN_FILE");
+  const bool named = !file.empty();
+  if (!named && local_tcp) file = kStationTokenFile;
+  if (file.empty()) return {};
+  std::ifstream in(file);
+  std::string token;
+  if (in) std::getline(in, token);
+  if (token.empty() && named) throw std::runtime_error("cannot read a token from " + file);
+  return token;
+}
+
 RpcClient connect(const Global& g) {
-  const std::string token = from_env(g.token, "CMMD_TOKEN");
   if (const std::string station = from_env(g.station, "CMMD_STATION"); !station.empty())
-    return RpcClient::connect_station({broker_of(g), g.topic_prefix, station, token});  // the token rides on each request
-  RpcClient client = RpcClient::connect(g.endpoint.empty() ? default_endpoint() : g.endpoint);
+    return RpcClient::connect_station({broker_of(g), g.topic_prefix, station, token_of(g, false)});  // on each request
+  const std::string endpoint = g.endpoint.empty() ? default_endpoint() : g.endpoint;
+  const bool tcp = endpoint.starts_with("tcp://");
+  const std::string token = token_of(g, tcp && loopback_endpoint(endpoint));
+  RpcClient client = RpcClient::connect(endpoint);
   if (!token.empty()) client.call("server.auth", {{"token", token}});
+  else if (tcp)
+    std::fprintf(stderr, "cmmctl: no token for %s: only server.info answers (use the Unix socket, --token, --token-file "
+                 "or $CMMD_TOKEN; the station's is %s, readable by cmmd's group)\n", endpoint.c_str(), kStationTokenFile);
   return client;
 }
 
@@ -324,7 +355,10 @@ int main(int argc, char** argv) {
   app.fallthrough();  // the global options (--station, --broker, --token, …) also after the command
   Global g;
   app.add_option("-e,--endpoint", g.endpoint, "tcp://HOST:PORT or unix:/PATH");
-  app.add_option("--token", g.token, "access token for TCP (or $CMMD_TOKEN)");
+  app.add_option("--token", g.token, "access token for TCP and the broker (or $CMMD_TOKEN)");
+  app.add_option("--token-file", g.token_file,
+                 "read the token from this file (or $CMMD_TOKEN_FILE; for TCP to this host, /var/lib/cmmd/operator.token "
+                 "when readable)");
   app.add_flag("--json", g.raw_json, "print replies as JSON");
   app.add_option("--station", g.station, "send the command to this station through the broker (or $CMMD_STATION)");
   app.add_option("--broker", g.broker, "the fleet's MQTT broker, HOST[:PORT] (or $CMMD_BROKER)");
@@ -416,6 +450,8 @@ int main(int argc, char** argv) {
   app.add_subcommand("ports", "serial ports on this computer, with USB ids");
   app.add_subcommand("fleet", "every station on the broker (--broker) with its state and current job");
   app.add_subcommand("dashboard", "the dashboard's URL to open in a browser (with the operator's token when cmmd.json sets none)");
+  app.add_subcommand("rotate-token",
+                     "replace the station's operator token (a leaked URL or file): the old one is refused from now on");
   CLI11_PARSE(app, argc, argv);
 
   const std::string command = app.get_subcommands().front()->get_name();
@@ -529,6 +565,16 @@ int main(int argc, char** argv) {
       const json d = client.call("server.dashboard");
       if (g.raw_json) std::cout << d.dump(1) << "\n";
       else std::printf("%s\n", d.at("url").get<std::string>().c_str());
+    }
+    else if (command == "rotate-token") {
+      client.call("server.rotate_token");
+      std::printf("the station's operator token was replaced: the old one is refused from now on\n");
+      try {
+        const json d = client.call("server.dashboard");  // the URL carries the new token
+        std::printf("the dashboard's URL is now %s\n", d.at("url").get<std::string>().c_str());
+      } catch (const RpcError&) {
+        // No dashboard (http.enabled false): the token is in the state folder's operator.token.
+      }
     }
     else if (command == "stop" || command == "reset") show(client.call("machine." + command));
     else if (command == "jog-stop") show(client.call("machine.jog_stop"));

@@ -2,6 +2,7 @@
 // TCP and a Unix socket, runs jobs one at a time, and tells systemd how it is doing.
 #include <CLI/CLI.hpp>
 #include <asio.hpp>
+#include <atomic>
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
@@ -26,6 +27,7 @@
 #include "daemon/rpc_server.hpp"
 #include "daemon/service_methods.hpp"
 #include "daemon/service_notifier.hpp"
+#include "daemon/station_token.hpp"
 #include "daemon/web_server.hpp"
 #include "hal/description/json_fields.hpp"
 
@@ -126,6 +128,7 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
   asio::io_context io;
   RpcDispatcher dispatcher;
   DashboardLink dashboard;  // before the servers: their handlers use it until they stop
+  std::unique_ptr<StationToken> station_token;  // the same; it lives in the server's TokenBook
   std::unique_ptr<Metrics> metrics;  // counts what the notifications tell, for /metrics; outlives the servers
   std::unique_ptr<RpcServer> server;
   std::unique_ptr<WebServer> web;  // the dashboard; null with http.enabled false
@@ -143,6 +146,15 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
   add_service_methods(dispatcher, service);
   add_dashboard_method(dispatcher, dashboard);
   server = std::make_unique<RpcServer>(io, dispatcher, config.server);
+  // Before any listener: a TCP, WebSocket or MQTT client is operator only by a token.
+  station_token = std::make_unique<StationToken>(server->tokens(), config.state_dir / "operator.token");
+  std::error_code removed;
+  std::filesystem::remove(config.state_dir / "dashboard.token", removed);  // earlier cmmd made a new one per start
+  const std::string operator_token = station_token->set_up();
+  std::atomic<int> http_port{0};  // set once the dashboard listens; a rotation before that has no URL to change
+  add_station_token_method(dispatcher, *station_token, [&dashboard, &config, &http_port](const std::string& token) {
+    if (const int port = http_port.load(); port != 0) dashboard.set(dashboard_url(config.server.tcp_bind, port, token));
+  });
   const std::vector<std::string> methods = dispatcher.methods();  // server.auth and server.subscribe among them now
   metrics = std::make_unique<Metrics>(std::set<std::string>(methods.begin(), methods.end()));
   dispatcher.on_answered([&metrics](const std::string& method, bool error) { metrics->count_request(method, error); });
@@ -163,9 +175,9 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
   }
   server->start();
   if (web) {
-    const std::string token = set_up_dashboard_token(server->tokens(), config.state_dir / "dashboard.token");
     web->start();
-    dashboard.set(dashboard_url(config.server.tcp_bind, web->port(), token));
+    http_port = web->port();
+    dashboard.set(dashboard_url(config.server.tcp_bind, web->port(), operator_token));
     spdlog::info("dashboard: {}", *dashboard.url());
   }
   if (fleet) fleet->start();

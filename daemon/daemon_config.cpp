@@ -45,6 +45,8 @@ void read_server(description::JsonFields& b, DaemonConfig& c) {
   s.max_batch_entries = static_cast<std::size_t>(b.integer("max_batch_entries", static_cast<int>(s.max_batch_entries), 1, 100000));
   s.max_connections = b.integer("max_connections", s.max_connections, 1, 100000);
   s.max_unix_connections = b.integer("max_unix_connections", s.max_unix_connections, 1, 100000);
+  s.max_unauthenticated_connections =
+      b.integer("max_unauthenticated_connections", s.max_unauthenticated_connections, 1, 100000);
   s.max_pending_requests = b.integer("max_pending_requests", s.max_pending_requests, 1, 100000);
   s.idle_timeout_s = b.number("idle_timeout_s", s.idle_timeout_s, 0.01, 86400);
   s.auth_timeout_s = b.number("auth_timeout_s", s.auth_timeout_s, 0.01, 86400);

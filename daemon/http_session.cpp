@@ -46,6 +46,14 @@ HttpSession::HttpSession(beast::tcp_stream stream, std::string peer, const HttpS
 
 void HttpSession::start() { read(); }
 
+void HttpSession::close(const std::string& reason) {
+  if (closed_ || upgraded_) return;
+  closed_ = true;
+  spdlog::warn("dashboard {}: connection closed: {}", peer_, reason);
+  beast::error_code ignored;
+  stream_.socket().close(ignored);  // the read in progress ends with operation_aborted
+}
+
 void HttpSession::read() {
   parser_.emplace();
   parser_->header_limit(kHeaderLimit);
@@ -57,6 +65,7 @@ void HttpSession::read() {
 }
 
 void HttpSession::on_read(const beast::error_code& ec) {
+  if (closed_) return;
   if (ec == http::error::end_of_stream || ec == beast::error::timeout || ec == boost::asio::error::operation_aborted ||
       ec == boost::asio::error::connection_reset || ec == boost::asio::error::eof) {
     beast::error_code ignored;
@@ -104,6 +113,7 @@ void HttpSession::handle(Request request) {
                            " and http.allowed_origins)");
     }
     buffer_.consume(buffer_.size());  // a client waits for the handshake before it sends frames
+    upgraded_ = true;
     return upgrade_(std::move(stream_), std::move(request), std::move(peer_), std::move(slot_));
   }
   switch (route.kind) {
@@ -151,7 +161,7 @@ void HttpSession::serve_report(const Request& request, const Route& route) {
   if (site_.tokens->any_configured()) {
     if (route.token.empty())
       return send_text(request, http::status::unauthorized, "a report needs ?token= with an observer or operator token");
-    const TokenCheck checked = site_.tokens->check(route.token);
+    const TokenCheck checked = site_.tokens->check(route.token, auth_source("http://" + peer_));
     if (checked.throttled)
       return send_text(request, http::status::too_many_requests, "too many wrong tokens lately: try again later");
     if (!checked.role || *checked.role < Role::observer) {
@@ -207,7 +217,7 @@ void HttpSession::send(Response response) {
 }
 
 void HttpSession::on_written(const beast::error_code& ec, bool close) {
-  if (ec) return;  // the peer went away: nothing left to do, the session ends with this handler
+  if (ec || closed_) return;  // the peer went away: nothing left to do, the session ends with this handler
   if (!close) return read();
   beast::error_code ignored;
   stream_.socket().shutdown(boost::asio::ip::tcp::socket::shutdown_send, ignored);

@@ -37,6 +37,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   HttpSession(boost::beast::tcp_stream stream, std::string peer, const HttpSite& site, std::shared_ptr<void> slot,
               Upgrade upgrade);
   void start();
+  // On the server's thread: HTTP carries no token, so a connection still speaking it is the first
+  // to go at the dashboard's limits (a browser opens another when it needs one).
+  bool evictable() const { return !upgraded_ && !closed_; }
+  void close(const std::string& reason);
 
  private:
   void read();
@@ -57,6 +61,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   Upgrade upgrade_;
   boost::beast::flat_buffer buffer_;
   std::optional<boost::beast::http::request_parser<boost::beast::http::empty_body>> parser_;
+  bool upgraded_ = false, closed_ = false;
 };
 
 }  // namespace cmm::daemon

@@ -89,8 +89,8 @@ MachineJog::~MachineJog() {
   if (thread_.joinable()) thread_.join();
 }
 
-MachineJog::Command MachineJog::command_for(const JogRequest& request) {
-  return {next_id_++, request, Clock::now() + seconds(request.hold_s)};
+MachineJog::Command MachineJog::command_for(const JogRequest& request, const std::string& client) {
+  return {next_id_++, client, request, Clock::now() + seconds(request.hold_s)};
 }
 
 void MachineJog::refuse_if_blocked(const hal::MachineStatus& status, const JogRequest& request) const {
@@ -126,12 +126,21 @@ hal::MachineStatus MachineJog::read_status() {
   }
 }
 
-MachineJog::Started MachineJog::jog(const JogRequest& request) {
+MachineJog::Started MachineJog::jog(const JogRequest& request, const std::string& client) {
   const std::lock_guard start(start_mutex_);
   {
     std::unique_lock lock(mutex_);
     if (running_ && !stop_) {
       Command& c = command_;
+      if (c.client != client) {
+        const int id = c.id;
+        const std::string owner = c.client;
+        lock.unlock();
+        throw RpcError(rpc_code::machine_busy,
+                       "machine.jog: jog " + std::to_string(id) + " of another client (" + owner +
+                           ") is running: only it renews or replaces it; machine.jog_stop stops it",
+                       {{"holder", "machine.jog"}, {"jog", id}});
+      }
       if (!request.distance_mm && !c.request.distance_mm && same_direction(request.direction, c.request.direction)) {
         c.deadline = Clock::now() + seconds(request.hold_s);
         c.request.speed_mm_s = request.speed_mm_s;
@@ -145,7 +154,7 @@ MachineJog::Started MachineJog::jog(const JogRequest& request) {
       refuse_if_blocked(status, request);
       lock.lock();
       if (running_ && !stop_) {  // else it ended meanwhile (a fault, a stop): start afresh below
-        command_ = command_for(request);
+        command_ = command_for(request, client);
         const int id = command_.id;
         lock.unlock();
         wake_.notify_all();
@@ -193,7 +202,7 @@ MachineJog::Started MachineJog::jog(const JogRequest& request) {
   int id = 0;
   {
     const std::lock_guard lock(mutex_);
-    command_ = command_for(request);
+    command_ = command_for(request, client);
     id = command_.id;
     running_ = true;
     stop_ = false;
@@ -333,16 +342,16 @@ bool MachineJog::running() const {
 }
 
 void add_jog_methods(RpcDispatcher& d, const std::shared_ptr<MachineJog>& jog) {
-  d.add("machine.jog", {Role::operator_, Work::blocking, [jog](const nlohmann::json& params, RpcContext&) {
+  d.add("machine.jog", {Role::operator_, Work::blocking, [jog](const nlohmann::json& params, RpcContext& ctx) {
           const JogRequest request = jog_request_from_json(params, jog->options());
-          const MachineJog::Started s = jog->jog(request);
+          const MachineJog::Started s = jog->jog(request, ctx.client());
           return nlohmann::json{{"jog", s.id},
                                 {"position", description::vec3_json(s.position)},
                                 {"direction", description::vec3_json(request.direction)},
                                 {"speed_mm_s", request.speed_mm_s},
                                 {"renewed", s.renewed}};
         }});
-  d.add("machine.jog_stop", {Role::operator_, Work::quick, [jog](const nlohmann::json&, RpcContext& ctx) {
+  d.add("machine.jog_stop", {Role::observer, Work::quick, [jog](const nlohmann::json&, RpcContext& ctx) {
           spdlog::info("machine.jog_stop from {}", ctx.peer());
           jog->stop();
           return nlohmann::json::object();

@@ -63,15 +63,17 @@ class MachineJog {
     hal::Vec3 position = hal::Vec3::Zero();  // where the ball was when the call came
     bool renewed = false;                    // the running jog's lease was extended
   };
-  // Starts a jog, or renews the running one (a continuous jog, the same direction: its lease is
-  // extended and its speed taken), or replaces it (anything else: the new jog starts where the
-  // running one's current segment ends). Returns at once; the jog runs on a thread of its own,
-  // holding the machine's lease. Throws RpcError: machine_busy while a job or a command holds the
-  // machine; machine_fault (NotHomed, SoftLimit naming the face it is at, EarlyTrigger while the
+  // Starts a jog for `client` (RpcContext::client), or renews the running one (a continuous jog of the
+  // same client in the same direction: its lease is extended and its speed taken), or replaces it
+  // (anything else from that client: the new jog starts where the running one's current segment
+  // ends). A jog belongs to the client that started it: another client's call is refused, so a
+  // second dashboard can never keep a jog alive that its owner let go. Returns at once; the jog runs
+  // on a thread of its own, holding the machine's lease. Throws RpcError: machine_busy while a job,
+  // a command or another client's jog holds the machine; machine_fault (NotHomed, SoftLimit naming the face it is at, EarlyTrigger while the
   // probe still touches what the last jog met along this direction, a link fault); invalid_state
   // while a touch a stop cut short is recorded.
-  Started jog(const JogRequest& request);
-  // Ends the running jog at once: the machine's controlled stop (the segment in progress throws
+  Started jog(const JogRequest& request, const std::string& client);
+  // Ends the running jog at once, whoever started it: the machine's controlled stop (the segment in progress throws
   // Aborted, which machine.status shows as the last fault). A jog that is not running is left as it is.
   void stop();
 
@@ -86,6 +88,7 @@ class MachineJog {
  private:
   struct Command {
     int id = 0;
+    std::string client;  // who started it, and alone may renew or replace it
     JogRequest request;
     std::chrono::steady_clock::time_point deadline;  // a continuous jog's lease
   };
@@ -95,7 +98,7 @@ class MachineJog {
   };
   void run(std::optional<MachineLink::Lease> lease, std::function<void()> check_stop);
   hal::MachineStatus read_status();  // faults as RpcError
-  Command command_for(const JogRequest& request);
+  Command command_for(const JogRequest& request, const std::string& client);
   void refuse_if_blocked(const hal::MachineStatus& status, const JogRequest& request) const;
 
   MachineLink& machine_;
@@ -118,8 +121,8 @@ class MachineJog {
   std::optional<Contact> contact_;
 };
 
-// machine.jog (operator, blocking: the first call reads the machine) and machine.jog_stop (operator,
-// quick: it must never wait behind a slow method).
+// machine.jog (operator, blocking: the first call reads the machine) and machine.jog_stop (observer:
+// a stop is always safe; quick: it must never wait behind a slow method).
 void add_jog_methods(RpcDispatcher& dispatcher, const std::shared_ptr<MachineJog>& jog);
 
 }  // namespace cmm::daemon

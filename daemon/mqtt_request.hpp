@@ -1,10 +1,11 @@
-// A JSON-RPC request that came over MQTT (a station's api/request), without the broker: whether it
-// is answered, with which role, and its answer. MqttStation runs these; tests/fuzz feeds them
-// anything a broker could carry.
+// Who asks, over MQTT, and whether the station answers: the broker's ACL lets a user publish a
+// station's requests only on <prefix>/<station>/api/request/<user> (Mosquitto's %u), so the topic
+// names the requester; its answer goes only under <prefix>/clients/<user>/. Without the broker, so
+// that tests and the fuzzer feed it anything a broker could carry; RequestGate does the rest.
 #pragma once
 
-#include <cstdint>
-#include <optional>
+#include <memory>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
@@ -16,25 +17,22 @@ namespace cmm::daemon {
 
 struct MqttAdmission {
   enum class Kind {
-    // No response topic, or one outside the replies' prefix: an answer on a topic everyone reads
-    // would show it to all, and one on the station's own topics would pass for its status or results.
+    // Not a request topic of a user, or a response topic outside that user's replies: an answer on
+    // a topic others read would show it to them, and one on the station's own topics would pass
+    // for its status or results.
     ignore,
-    refuse,  // answered at once with `refusal` (too large, a wrong token)
-    run,     // to be answered with `role`
+    refuse,  // answered at once with `refusal` (a wrong token)
+    run,     // to be answered, in `context` (the user, the role its token grants: none without one)
   };
   Kind kind = Kind::ignore;
+  std::string user;
   nlohmann::json refusal;
-  Role role = Role::none;
+  std::shared_ptr<RpcContext> context;
 };
 
-// The token travels as the user property "token"; none is role none (server.info only). Replies go
-// only to response topics under `reply_prefix` (<prefix>/clients/, docs/fleet.md) without wildcards.
-MqttAdmission admit_mqtt_request(const MqttMessage& request, const std::string& reply_prefix,
-                                 std::size_t max_request_bytes, TokenBook& tokens);
-
-// The JSON-RPC response to an admitted request in a context of its own (`context_id`, for logs),
-// or nothing for a notification. Never throws for what the payload holds.
-std::optional<nlohmann::json> answer_mqtt_request(const MqttMessage& request, Role role, const RpcDispatcher& dispatcher,
-                                                  const ParseLimits& limits, std::uint64_t context_id);
+// `request_prefix`: <prefix>/<station>/api/request/; `reply_prefix`: <prefix>/clients/. The token
+// travels as the user property "token"; a wrong one counts against the user alone.
+MqttAdmission admit_mqtt_request(const MqttMessage& request, const std::string& request_prefix,
+                                 const std::string& reply_prefix, TokenBook& tokens);
 
 }  // namespace cmm::daemon

@@ -1,5 +1,6 @@
-// MqttStation: notifications to topics, the outbox's deliveries, and api/request on two threads of
-// its own (a long machine.home over the broker leaves one for the next request).
+// MqttStation: notifications to topics, the outbox's deliveries, and api/request/<user>: quick
+// methods (machine.stop) answered at once, slow ones on two threads of its own (a long machine.home
+// over the broker leaves one for the next request).
 #include "daemon/mqtt_station.hpp"
 
 #include <asio/post.hpp>
@@ -34,7 +35,11 @@ MqttStation::MqttStation(MqttOptions options, std::string version, const std::fi
     : options_(std::move(options)),
       version_(std::move(version)),
       topics_(station_topics(options_.topic_prefix, options_.station)),
-      dispatcher_(dispatcher),
+      gate_(dispatcher,
+            {.max_request_bytes = limits.max_request_bytes,
+             .max_batch_entries = limits.max_batch_entries,
+             .max_pending_requests = limits.max_pending},
+            Framing::messages),
       tokens_(tokens),
       limits_(limits),
       outbox_(state_dir / "mqtt-outbox"),
@@ -97,7 +102,7 @@ bool MqttStation::connected() const { return client_->connected(); }
 
 void MqttStation::on_connected() {
   spdlog::info("MQTT {}: connected as station {}", client_->broker(), options_.station);
-  client_->subscribe(topics_.request(), 1);
+  client_->subscribe(topics_.requests() + "+", 1);
   std::lock_guard lock(mutex_);
   last_failure_.clear();
   publish_status();
@@ -169,41 +174,46 @@ void MqttStation::notify(const std::string& method, const json& params) {
 }
 
 void MqttStation::on_request(const MqttMessage& message) {
-  if (message.topic != topics_.request() || !requests_ || !requests_->accepting) return;
-  const MqttAdmission admission = admit_mqtt_request(message, topics_.replies, limits_.max_request_bytes, tokens_);
+  if (!requests_ || !requests_->accepting) return;
+  MqttAdmission admission = admit_mqtt_request(message, topics_.requests(), topics_.replies, tokens_);
   if (admission.kind == MqttAdmission::Kind::ignore) {
     std::lock_guard lock(mutex_);
     if (!ignored_logged_)
-      spdlog::warn("MQTT: a request with response topic \"{}\" ignored: replies go only under {} (said once)",
-                   message.response_topic, topics_.replies);
+      spdlog::warn("MQTT: a request on \"{}\" with response topic \"{}\" ignored: requests come on {}<user>, replies "
+                   "go only under {}<that user>/ (said once)",
+                   message.topic, message.response_topic, topics_.requests(), topics_.replies);
     ignored_logged_ = true;
     return;
   }
-  if (admission.kind == MqttAdmission::Kind::refuse) return reply(message, admission.refusal);
-  if (requests_->pending.fetch_add(1) >= limits_.max_pending) {
-    requests_->pending.fetch_sub(1);
-    reply(message, error_response(nullptr, RpcError(rpc_code::server_busy, "too many MQTT requests waiting",
-                                                    {{"max_pending", limits_.max_pending}})));
-    return;
+  if (admission.kind == MqttAdmission::Kind::refuse) return reply(message, to_wire(admission.refusal));
+  // On the broker's thread: quick methods (machine.stop among them) are answered here and never
+  // wait behind slow ones, whoever fills the queue.
+  std::shared_ptr<RpcContext> ctx = admission.context;
+  // The station's queue is shared by all requesters (pending 0: no per-client count over MQTT).
+  GateDecision d = gate_.admit(message.payload, *ctx, 0, [this](Work, std::size_t count, std::size_t) {
+    if (requests_->pending.fetch_add(count) + count <= limits_.max_pending) return std::optional<std::string>();
+    requests_->pending.fetch_sub(count);
+    return std::optional<std::string>("too many MQTT requests waiting (max_pending " + std::to_string(limits_.max_pending) + ")");
+  });
+  switch (d.kind) {
+    case GateDecision::Kind::nothing: return;
+    case GateDecision::Kind::answer:
+    case GateDecision::Kind::close:  // a message is not a stream: nothing to close, the error is the answer
+      if (d.answer) reply(message, to_wire(*d.answer));
+      return;
+    case GateDecision::Kind::run: break;
   }
-  asio::post(requests_->pool, [this, message, role = admission.role] {
-    std::uint64_t id;
-    {
-      std::lock_guard lock(mutex_);
-      id = next_context_++;
-    }
-    const auto response = answer_mqtt_request(
-        message, role, dispatcher_, {.max_depth = 128, .max_batch_entries = limits_.max_batch_entries}, id);
-    if (response) reply(message, *response);
-    requests_->pending.fetch_sub(1);
+  asio::post(requests_->pool, [this, message, ctx, d = std::move(d)] {
+    if (const std::optional<std::string> response = gate_.run(d.message, *ctx)) reply(message, *response);
+    requests_->pending.fetch_sub(d.count);
   });
 }
 
-void MqttStation::reply(const MqttMessage& request, const json& response) {
+void MqttStation::reply(const MqttMessage& request, const std::string& response) {
   MqttMessage m;
   m.topic = request.response_topic;
   m.correlation = request.correlation;
-  m.payload = to_wire(response);
+  m.payload = response;
   m.qos = 1;
   try {
     if (!client_->publish(m)) spdlog::warn("MQTT: reply to {} lost: the link is down", request.response_topic);

@@ -1,5 +1,5 @@
 // The station on a fleet's MQTT broker (docs/fleet.md): its retained status with a last will, each
-// job's state, progress and result, and JSON-RPC requests on api/request answered on the
+// job's state, progress and result, and JSON-RPC requests on api/request/<user> answered on the
 // requester's own response topic. States and results go through the on-disk outbox, so a broker
 // that is away loses none of them and never holds up a job.
 #pragma once
@@ -18,6 +18,7 @@
 #include "daemon/client/mqtt_client.hpp"
 #include "daemon/mqtt_options.hpp"
 #include "daemon/mqtt_outbox.hpp"
+#include "daemon/request_gate.hpp"
 #include "daemon/token_book.hpp"
 
 namespace cmm::daemon {
@@ -25,15 +26,15 @@ namespace cmm::daemon {
 struct MqttRequestLimits {
   std::size_t max_request_bytes = 1 << 20;
   std::size_t max_batch_entries = 128;
-  std::size_t max_pending = 16;  // requests waiting or running; more are answered server_busy
+  std::size_t max_pending = 16;  // slow requests waiting or running; more are answered server_busy
 };
 
 // The topics of one station.
 struct StationTopics {
   std::string base;  // <prefix>/<station>/
   std::string status() const { return base + "status"; }
-  std::string request() const { return base + "api/request"; }
-  std::string replies;  // <prefix>/clients/: where requesters' response topics must lie
+  std::string requests() const { return base + "api/request/"; }  // + the requester's broker user name
+  std::string replies;  // <prefix>/clients/: where requesters' response topics must lie, under their user
   std::string job(int id, const std::string& what) const { return base + "jobs/" + std::to_string(id) + "/" + what; }
 };
 StationTopics station_topics(const std::string& prefix, const std::string& station);
@@ -58,12 +59,12 @@ class MqttStation {
   void on_request(const MqttMessage& message);
   void send_kept(const MqttMessage& message);
   void publish_status();  // under mutex_
-  void reply(const MqttMessage& request, const nlohmann::json& response);
+  void reply(const MqttMessage& request, const std::string& response);
 
   MqttOptions options_;
   std::string version_;
   StationTopics topics_;
-  const RpcDispatcher& dispatcher_;
+  RequestGate gate_;
   TokenBook& tokens_;
   MqttRequestLimits limits_;
   MqttOutbox outbox_;
@@ -73,9 +74,8 @@ class MqttStation {
   nlohmann::json job_ = nullptr;      // {"id", "state"} of the job running, or null
   std::map<int, std::uint64_t> in_flight_;  // message id → outbox number
   std::map<int, std::chrono::steady_clock::time_point> last_progress_;
-  std::uint64_t next_context_ = 1;
   std::string last_failure_;  // the last reason a connect failed, logged once
-  bool ignored_logged_ = false;  // a request without a usable response topic: said once, not per message
+  bool ignored_logged_ = false;  // a request not on a user's topic or without a usable response topic: said once
 
   struct Requests;
   std::unique_ptr<Requests> requests_;  // the threads requests run on

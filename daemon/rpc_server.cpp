@@ -44,15 +44,13 @@ void retry_accept_later(asio::io_context& io, const asio::error_code& ec, const 
   timer->async_wait([timer, retry](const asio::error_code&) { retry(); });
 }
 
-// A connection that guesses wrong this often is closed after the last answer.
-constexpr int kMaxFailedAuthPerConnection = 3;
-
 }  // namespace
 
 RpcServer::RpcServer(asio::io_context& io, RpcDispatcher& dispatcher, ServerOptions options)
     : io_(io),
       dispatcher_(dispatcher),
       options_(std::move(options)),
+      gate_(dispatcher_, gate_limits(options_), Framing::lines),
       unsent_budget_(options_.max_total_unsent_bytes),
       tokens_(options_.tokens, options_.auth_guesses_per_s, options_.auth_guess_burst) {
   dispatcher_.add("server.auth", {Role::none, Work::quick, [this](const json& p, RpcContext& c) { return auth(p, c); }});
@@ -95,8 +93,8 @@ void RpcServer::listen_tcp() {
     throw std::runtime_error("cannot listen on " + where + ": " + e.code().message());
   }
   tcp_port_ = tcp_acceptor_->local_endpoint().port();
-  spdlog::info("JSON-RPC listening on tcp://{}:{}{}", endpoint.address().to_string(), tcp_port_,
-               options_.tokens.empty() ? " (no tokens: operator)" : " (tokens required)");
+  spdlog::info("JSON-RPC listening on tcp://{}:{} (a token makes a client operator or observer)",
+               endpoint.address().to_string(), tcp_port_);
 }
 
 void RpcServer::listen_unix() {
@@ -145,8 +143,7 @@ void RpcServer::accept_tcp() {
     asio::error_code ignored;
     socket.set_option(asio::ip::tcp::no_delay(true), ignored);
     std::string peer = tcp_peer(socket);
-    const Role role = tokens_.any_configured() ? Role::none : Role::operator_;
-    admit(std::move(socket), std::move(peer), role, true);
+    admit(std::move(socket), std::move(peer), Role::none, true);  // never operator by address: by a token only
     accept_tcp();
   });
 }
@@ -164,25 +161,22 @@ void RpcServer::accept_unix() {
 
 template <typename Socket>
 void RpcServer::admit(Socket socket, std::string peer, Role role, bool tcp) {
-  const std::uint64_t id = next_id_++;
-  const SessionLimits limits{.max_request_bytes = options_.max_request_bytes,
-                             .max_batch_entries = options_.max_batch_entries,
-                             .max_pending_requests = static_cast<std::size_t>(std::max(0, options_.max_pending_requests)),
-                             .idle_timeout_s = options_.idle_timeout_s,
+  const std::uint64_t id = next_connection_id();
+  const SessionLimits limits{.idle_timeout_s = options_.idle_timeout_s,
                              .auth_timeout_s = options_.auth_timeout_s,
                              .max_unsent_bytes = options_.max_unsent_bytes,
                              .tcp = tcp};
   // Each transport counts its own connections: idle TCP clients cannot lock cmmctl out of the Unix socket.
   const int allowed = tcp ? options_.max_connections : options_.max_unix_connections;
   const char* limit_name = tcp ? "max_connections" : "max_unix_connections";
-  auto session = std::make_shared<RpcSession>(
-      RpcSession::Socket(std::move(socket)), id, std::move(peer), role, limits, dispatcher_, *workers_, unsent_budget_,
-      nullptr);
+  auto session = std::make_shared<RpcSession>(RpcSession::Socket(std::move(socket)), id, std::move(peer), role,
+                                              /*trusted=*/!tcp, limits, gate_, *workers_, unsent_budget_, nullptr);
+  const bool room = !tcp || make_room_for_tcp();
   bool over;
   {
     std::lock_guard lock(sessions_mutex_);
     std::size_t& open = tcp ? tcp_sessions_ : unix_sessions_;
-    over = open >= static_cast<std::size_t>(std::max(0, allowed));
+    over = !room || open >= static_cast<std::size_t>(std::max(0, allowed));
     if (!over) ++open;
     sessions_.emplace(id, session);  // a refused one too, so that stop() closes it
   }
@@ -197,6 +191,28 @@ void RpcServer::admit(Socket socket, std::string peer, Role role, bool tcp) {
                              {{limit_name, allowed}}));
   else
     session->start();
+}
+
+bool RpcServer::make_room_for_tcp() {
+  std::shared_ptr<RpcSession> oldest;
+  std::size_t unauthenticated = 0;
+  bool full;
+  {
+    std::lock_guard lock(sessions_mutex_);
+    full = tcp_sessions_ >= static_cast<std::size_t>(std::max(0, options_.max_connections));
+    for (const auto& [id, session] : sessions_) {  // in id order: the first found is the oldest
+      if (!session->counts_as_unauthenticated_tcp()) continue;
+      if (!oldest) oldest = session;
+      ++unauthenticated;
+    }
+  }
+  const bool at_limit = unauthenticated >= static_cast<std::size_t>(std::max(1, options_.max_unauthenticated_connections));
+  if (!full && !at_limit) return true;
+  if (!oldest) return false;
+  // Closed now, not after a reply: its count is free before the new one is counted.
+  oldest->evict(std::string("an unauthenticated connection closed to make room for a new one (") +
+                (full ? "max_connections" : "max_unauthenticated_connections") + " reached)");
+  return true;
 }
 
 void RpcServer::notify(const std::string& topic, const std::string& method, const json& params) {
@@ -240,24 +256,9 @@ json RpcServer::auth(const json& params, RpcContext& ctx) {
   const auto token = params.find("token");
   if (!params.is_object() || token == params.end() || !token->is_string())
     throw_invalid_param("/token", "server.auth needs {\"token\": string}");
-  const TokenCheck checked = tokens_.check(token->get_ref<const std::string&>());
-  if (checked.throttled) {
-    // Too many wrong guesses lately, from anyone: not even compared (TokenBook logs it once).
-    ctx.close_after_reply();
-    throw RpcError(rpc_code::auth_failed, "too many failed server.auth attempts: try again later",
-                   {{"retry_after_s", checked.retry_after_s}});
-  }
-  const std::optional<Role> granted = checked.role;
-  if (!granted) {
-    const int failures = ctx.count_failed_auth();
-    spdlog::warn("connection {} ({}): server.auth with an unknown token ({} on this connection)", ctx.connection_id(),
-                 ctx.peer(), failures);
-    if (failures >= kMaxFailedAuthPerConnection) ctx.close_after_reply();
-    throw RpcError(rpc_code::auth_failed, "unknown token");
-  }
-  if (*granted > ctx.role()) ctx.set_role(*granted);  // a token never lowers what the transport gave
-  spdlog::info("connection {} ({}) authenticated: role {}", ctx.connection_id(), ctx.peer(), to_string(ctx.role()));
-  return {{"role", to_string(ctx.role())}};
+  const Role role = authenticate(tokens_, token->get_ref<const std::string&>(), ctx, auth_source(ctx.peer()));
+  spdlog::info("connection {} ({}) authenticated: role {}", ctx.connection_id(), ctx.peer(), to_string(role));
+  return {{"role", to_string(role)}};
 }
 
 json RpcServer::subscribe(const json& params, RpcContext& ctx) {

@@ -17,6 +17,7 @@
 
 #include "daemon/byte_budget.hpp"
 #include "daemon/client/json_rpc.hpp"
+#include "daemon/request_gate.hpp"
 #include "daemon/server_options.hpp"
 #include "daemon/token_book.hpp"
 #include "daemon/worker_pools.hpp"
@@ -61,6 +62,9 @@ class RpcServer {
   void accept_unix();
   template <typename Socket>
   void admit(Socket socket, std::string peer, Role role, bool tcp);
+  // On the io thread, for a new TCP connection: closes the oldest unauthenticated one when they
+  // are at their limit, or all TCP connections are; false when no room can be made (all authenticated).
+  bool make_room_for_tcp();
   nlohmann::json auth(const nlohmann::json& params, RpcContext& ctx);
   nlohmann::json subscribe(const nlohmann::json& params, RpcContext& ctx);
 
@@ -69,12 +73,12 @@ class RpcServer {
   const ServerOptions options_;
   std::optional<asio::ip::tcp::acceptor> tcp_acceptor_;
   std::optional<asio::local::stream_protocol::acceptor> unix_acceptor_;
+  RequestGate gate_;
   std::optional<WorkerPools> workers_;
   ByteBudget unsent_budget_;
   int tcp_port_ = 0;
   bool started_ = false, stopped_ = false, unix_bound_ = false;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);  // accept handlers outliving us see it gone
-  std::uint64_t next_id_ = 1;
 
   mutable std::mutex sessions_mutex_;
   std::map<std::uint64_t, std::shared_ptr<RpcSession>> sessions_;

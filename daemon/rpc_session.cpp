@@ -30,12 +30,13 @@ std::string seconds_text(double s) {
 
 }  // namespace
 
-RpcSession::RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, SessionLimits limits,
-                       const RpcDispatcher& dispatcher, WorkerPools& workers, ByteBudget& budget, OnClosed on_closed)
+RpcSession::RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, bool trusted,
+                       SessionLimits limits, const RequestGate& gate, WorkerPools& workers, ByteBudget& budget,
+                       OnClosed on_closed)
     : socket_(std::move(socket)),
-      context_(connection_id, std::move(peer), role),
+      context_(connection_id, std::move(peer), role, trusted),
       limits_(limits),
-      dispatcher_(dispatcher),
+      gate_(gate),
       workers_(workers),
       budget_(budget),
       on_closed_(std::move(on_closed)),
@@ -54,6 +55,11 @@ void RpcSession::start() {
 void RpcSession::refuse(const RpcError& error) {
   spdlog::warn("connection from {} refused: {}", context_.peer(), error.what());
   close_after_write(error);
+}
+
+void RpcSession::evict(const std::string& reason) {
+  spdlog::warn("connection {} ({}) closed: {}", context_.connection_id(), context_.peer(), reason);
+  close(reason);
 }
 
 void RpcSession::read() {
@@ -77,15 +83,12 @@ void RpcSession::on_read(const asio::error_code& ec, std::size_t n) {
   }
   last_bytes_ = Clock::now();
   inbox_.append(read_buffer_.data(), n);
-  const RpcError too_large(rpc_code::request_too_large,
-                           "request over max_request_bytes (" + std::to_string(limits_.max_request_bytes) + " bytes)",
-                           {{"max_request_bytes", limits_.max_request_bytes}});
+  const std::size_t max_bytes = gate_.limits().max_request_bytes;
   std::size_t begin = 0;
   for (auto end = inbox_.find(kNewline, scanned_); end != std::string::npos; end = inbox_.find(kNewline, begin)) {
     std::string_view line(inbox_.data() + begin, end - begin);
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     begin = end + 1;
-    if (line.size() > limits_.max_request_bytes) return close_after_write(too_large);
     last_line_ = last_bytes_;
     on_line(line);
     if (closed_ || closing_) return;
@@ -93,8 +96,12 @@ void RpcSession::on_read(const asio::error_code& ec, std::size_t n) {
   }
   inbox_.erase(0, begin);
   scanned_ = inbox_.size();
-  if (inbox_.size() > limits_.max_request_bytes + 1) return close_after_write(too_large);  // + 1: a '\r'
-  if (unsent_bytes_ > limits_.max_request_bytes) {
+  if (inbox_.size() > max_bytes + 1) {  // + 1: a '\r'
+    reply(gate_.too_large(inbox_.size()));
+    return finish_after_output("a request over max_request_bytes");
+  }
+  if (const std::optional<std::string> refused = gate_.refuse_partial(inbox_, context_)) return close(*refused);
+  if (unsent_bytes_ > max_bytes) {
     // The peer sends faster than it reads its replies: stop reading until it catches up.
     read_paused_ = true;
     ++timer_generation_;
@@ -106,43 +113,26 @@ void RpcSession::on_read(const asio::error_code& ec, std::size_t n) {
 }
 
 void RpcSession::on_line(std::string_view line) {
-  if (line.find_first_not_of(" \t") == std::string_view::npos) return;
-  nlohmann::json message;
-  try {
-    message = parse_message(line, {.max_depth = 128, .max_batch_entries = limits_.max_batch_entries});
-  } catch (const RpcError& e) {
-    spdlog::debug("connection {}: {}", context_.connection_id(), e.what());
-    return reply(error_response(nullptr, e));
+  GateDecision d = gate_.admit(line, context_, pending_, [this](Work work, std::size_t count, std::size_t bytes) {
+    return workers_.admit(work, count, bytes);
+  });
+  switch (d.kind) {
+    case GateDecision::Kind::nothing: return;
+    case GateDecision::Kind::answer: return reply(d.answer);
+    case GateDecision::Kind::run: return run_slow(std::move(d));
+    case GateDecision::Kind::close:
+      if (!d.answer) return close(d.reason);
+      reply(d.answer);
+      return finish_after_output(d.reason);
   }
-  const Work work = dispatcher_.work_of(message);
-  if (work == Work::quick) return reply(dispatcher_.handle(message, context_));
-  const std::size_t count = message_size(message);
-  if (pending_ + count > limits_.max_pending_requests) {
-    spdlog::debug("connection {}: over max_pending_requests ({})", context_.connection_id(), limits_.max_pending_requests);
-    return reply(refuse_message(
-        message, RpcError(rpc_code::too_many_pending,
-                          "more than max_pending_requests (" + std::to_string(limits_.max_pending_requests) +
-                              ") requests pending on this connection",
-                          {{"max_pending_requests", limits_.max_pending_requests}})));
-  }
-  if (const std::optional<std::string> busy = workers_.admit(work, count, line.size())) {
-    spdlog::info("connection {} ({}): {}", context_.connection_id(), context_.peer(), *busy);
-    return reply(refuse_message(message, RpcError(rpc_code::server_busy, *busy, {{"retry", true}})));
-  }
-  run_slow(std::move(message), count, work, line.size());
 }
 
-void RpcSession::run_slow(nlohmann::json message, std::size_t count, Work work, std::size_t bytes) {
-  pending_ += count;
-  asio::post(workers_.pool(work, context_.role()), [self = shared_from_this(), message = std::move(message), count, work, bytes] {
-    std::optional<std::string> line;
-    try {
-      if (const auto response = self->dispatcher_.handle(message, self->context_)) line = to_wire(*response);
-    } catch (const std::exception& e) {  // building the reply failed (out of memory): the request gets no answer
-      spdlog::error("connection {}: a reply could not be made: {}", self->context_.connection_id(), e.what());
-    }
-    self->workers_.release(work, count, bytes);
-    asio::post(self->socket_.get_executor(), [self, line = std::move(line), count]() mutable {
+void RpcSession::run_slow(GateDecision d) {
+  pending_ += d.count;
+  asio::post(workers_.pool(d.work, context_.role()), [self = shared_from_this(), d = std::move(d)] {
+    std::optional<std::string> line = self->gate_.run(d.message, self->context_);
+    self->workers_.release(d.work, d.count, d.bytes);
+    asio::post(self->socket_.get_executor(), [self, line = std::move(line), count = d.count]() mutable {
       self->pending_ -= count;
       if (line && !self->closing_) self->queue(std::make_shared<const std::string>(std::move(*line)));
       if (!self->closed_ && !self->closing_ && !self->read_paused_ && !self->peer_done_) self->arm_idle_timer();
@@ -197,7 +187,7 @@ void RpcSession::on_written(const asio::error_code& ec, std::size_t lines, std::
   outbox_.erase(outbox_.begin(), outbox_.begin() + static_cast<std::ptrdiff_t>(lines));
   unsent_bytes_ -= bytes;
   budget_.give(bytes);
-  if (read_paused_ && !closing_ && unsent_bytes_ <= limits_.max_request_bytes) {
+  if (read_paused_ && !closing_ && unsent_bytes_ <= gate_.limits().max_request_bytes) {
     read_paused_ = false;
     arm_idle_timer();
     read();
@@ -239,10 +229,10 @@ void RpcSession::on_idle_timer() {
 }
 
 void RpcSession::arm_auth_timer() {
-  if (limits_.auth_timeout_s <= 0 || context_.role() != Role::none) return;
+  if (limits_.auth_timeout_s <= 0 || context_.authenticated()) return;
   auth_timer_.expires_after(seconds(limits_.auth_timeout_s));
   auth_timer_.async_wait([self = shared_from_this()](const asio::error_code& ec) {
-    if (ec || self->closed_ || self->context_.role() != Role::none) return;
+    if (ec || self->closed_ || self->context_.authenticated()) return;
     self->close("not authenticated within auth_timeout_s (" + seconds_text(self->limits_.auth_timeout_s) + " s)");
   });
 }

@@ -16,14 +16,12 @@
 
 #include "daemon/byte_budget.hpp"
 #include "daemon/client/json_rpc.hpp"
+#include "daemon/request_gate.hpp"
 #include "daemon/worker_pools.hpp"
 
 namespace cmm::daemon {
 
 struct SessionLimits {
-  std::size_t max_request_bytes;
-  std::size_t max_batch_entries;
-  std::size_t max_pending_requests;
   double idle_timeout_s;
   double auth_timeout_s;  // <= 0: no deadline to authenticate
   std::size_t max_unsent_bytes;
@@ -36,8 +34,9 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   using Socket = asio::generic::stream_protocol::socket;
   using OnClosed = std::function<void(std::uint64_t connection_id)>;
 
-  RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, SessionLimits limits,
-             const RpcDispatcher& dispatcher, WorkerPools& workers, ByteBudget& budget, OnClosed on_closed);
+  // `trusted`: the Unix socket, whose file permissions vouch for the client (operator, authenticated).
+  RpcSession(Socket socket, std::uint64_t connection_id, std::string peer, Role role, bool trusted, SessionLimits limits,
+             const RequestGate& gate, WorkerPools& workers, ByteBudget& budget, OnClosed on_closed);
 
   void start();
   void set_on_closed(OnClosed on_closed) { on_closed_ = std::move(on_closed); }
@@ -45,6 +44,10 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   void refuse(const RpcError& error);
   void send_notification(std::shared_ptr<const std::string> line);
   void close(const std::string& reason);
+  // Closes at once, with a log line: an unauthenticated connection making room for a new one.
+  void evict(const std::string& reason);
+  // An open TCP connection no token has authenticated yet: the first to go at the limits.
+  bool counts_as_unauthenticated_tcp() const { return limits_.tcp && !closed_ && !closing_ && !context_.authenticated(); }
 
   RpcContext& context() { return context_; }
 
@@ -52,7 +55,7 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   void read();
   void on_read(const asio::error_code& ec, std::size_t n);
   void on_line(std::string_view line);
-  void run_slow(nlohmann::json message, std::size_t count, Work work, std::size_t bytes);
+  void run_slow(GateDecision decision);
   void reply(const std::optional<nlohmann::json>& response);
   void queue(std::shared_ptr<const std::string> line);
   void write();
@@ -68,7 +71,7 @@ class RpcSession : public std::enable_shared_from_this<RpcSession> {
   Socket socket_;
   RpcContext context_;
   SessionLimits limits_;
-  const RpcDispatcher& dispatcher_;
+  const RequestGate& gate_;
   WorkerPools& workers_;
   ByteBudget& budget_;
   OnClosed on_closed_;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "daemon/request_gate.hpp"
 #include "daemon/token_book.hpp"
 #include "daemon/worker_counts.hpp"
 
@@ -20,20 +21,30 @@ struct ServerOptions {
   unsigned unix_mode = 0660;
   std::size_t max_request_bytes = 4u << 20;  // one line, without its newline
   std::size_t max_batch_entries = 128;       // requests in one batch; more: one batch_too_large error
-  int max_connections = 256;                 // TCP connections
+  int max_connections = 256;                 // TCP connections; the dashboard's are counted apart
+  // Of those, not authenticated by a token (the dashboard's: plain HTTP too): past this, or at
+  // max_connections, the oldest of them is closed to make room; an authenticated one never is.
+  int max_unauthenticated_connections = 64;
   int max_unix_connections = 64;             // Unix socket connections, counted apart: cmmctl stop always gets in
   int max_pending_requests = 64;             // slow requests running or queued, per connection
   // A partial line then silence this long: closed. A TCP connection that has not subscribed is
   // also closed when it sends no complete line for this long while it waits for no reply.
   double idle_timeout_s = 30;
-  double auth_timeout_s = 10;                // with tokens: a TCP connection not authenticated by then is closed
+  double auth_timeout_s = 10;                // a TCP connection (a WebSocket of role none) not authenticated by then is closed
   double auth_guesses_per_s = 5, auth_guess_burst = 20;  // how fast wrong tokens may come (AuthThrottle)
-  std::vector<AccessToken> tokens;           // empty: TCP is operator, and only loopback binds
+  std::vector<AccessToken> tokens;           // empty: the station token (station_token.hpp), and only loopback binds
   WorkerCounts workers;                      // the threads of the slow methods
   std::size_t max_unsent_bytes = 64u << 20;  // a connection further behind in reading than this is dropped
   std::size_t max_total_unsent_bytes = 256u << 20;  // the same for all connections together
   std::vector<std::string> topics = {"job", "machine"};  // what server.subscribe accepts
   bool operator==(const ServerOptions&) const = default;
 };
+
+// The request gate's share of the block, the same for TCP, the Unix socket and the dashboard.
+inline GateLimits gate_limits(const ServerOptions& s) {
+  return {.max_request_bytes = s.max_request_bytes,
+          .max_batch_entries = s.max_batch_entries,
+          .max_pending_requests = static_cast<std::size_t>(s.max_pending_requests > 0 ? s.max_pending_requests : 0)};
+}
 
 }  // namespace cmm::daemon

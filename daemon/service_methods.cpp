@@ -84,8 +84,9 @@ void add_machine_methods(RpcDispatcher& d, Service& s, const std::shared_ptr<Mac
             return nlohmann::json{{"position", description::vec3_json(cmm.status().position)}};
           });
         }});
-  // stop and abort run on the io thread: they must never wait behind a slow method.
-  d.add("machine.stop", {Role::operator_, Work::quick, [&s](const nlohmann::json&, RpcContext& ctx) {
+  // stop and abort run on the io thread: they must never wait behind a slow method. A stop is always
+  // safe, so every authenticated client may stop, observers too; an abort latches until an operator's reset.
+  d.add("machine.stop", {Role::observer, Work::quick, [&s](const nlohmann::json&, RpcContext& ctx) {
           spdlog::warn("machine.stop from {}", ctx.peer());
           s.machine.count_stop();
           s.jobs.machine_stopped();

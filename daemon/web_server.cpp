@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <functional>
 #include <future>
 #include <map>
 #include <mutex>
@@ -52,17 +53,24 @@ std::string peer_of(const tcp::socket& socket) {
 struct WebServer::Impl {
   Impl(RpcDispatcher& dispatcher, TokenBook& tokens, const ServerOptions& server, HttpOptions http,
        std::filesystem::path jobs_dir)
-      : dispatcher(dispatcher), tokens(tokens), server(server), http(std::move(http)), budget(server.max_total_unsent_bytes) {
+      : dispatcher(dispatcher),
+        tokens(tokens),
+        server(server),
+        http(std::move(http)),
+        gate(dispatcher, gate_limits(server), Framing::messages),
+        budget(server.max_total_unsent_bytes) {
     site.roots.web_root = this->http.web_root.empty() ? default_web_root() : this->http.web_root;
     site.host_rules = {.port = 0, .bind = server.tcp_bind, .allowed_origins = this->http.allowed_origins};
     site.jobs_dir = std::move(jobs_dir);
-    site.idle_timeout_s = server.idle_timeout_s;
+    // HTTP carries no token: a request gets the short unauthenticated deadline to arrive whole.
+    site.idle_timeout_s = std::min(server.idle_timeout_s, server.auth_timeout_s);
     site.tokens = &tokens;
   }
 
   void listen();
   void accept();
   void upgrade(beast::tcp_stream stream, HttpSession::Request request, std::string peer, std::shared_ptr<void> slot);
+  bool make_room();
   void close_all();
 
   // What the sessions use comes before the io_context: destroying it destroys the handlers that
@@ -71,6 +79,7 @@ struct WebServer::Impl {
   TokenBook& tokens;
   const ServerOptions server;
   const HttpOptions http;
+  RequestGate gate;
   HttpSite site;
   ByteBudget budget;
   std::optional<WebWorkers> workers;
@@ -80,9 +89,9 @@ struct WebServer::Impl {
   // The sockets after it: closed before it goes.
   std::optional<tcp::acceptor> acceptor;
   std::map<std::uint64_t, std::shared_ptr<WebSocketSession>> sessions;
+  std::map<std::uint64_t, std::weak_ptr<HttpSession>> http_sessions;  // the server's thread only
   std::thread thread;
   bool started = false, stopped = false;
-  std::uint64_t next_id = 1;
 };
 
 void WebServer::Impl::listen() {
@@ -121,20 +130,55 @@ void WebServer::Impl::accept() {
     beast::error_code ignored;
     socket.set_option(tcp::no_delay(true), ignored);
     std::string peer = peer_of(socket);
-    if (open_connections.load() >= static_cast<std::size_t>(std::max(0, server.max_connections))) {
-      spdlog::warn("dashboard connection from {} refused: more than max_connections ({})", peer, server.max_connections);
+    if (!make_room()) {
+      spdlog::warn("dashboard connection from {} refused: more than max_connections ({}), all authenticated", peer,
+                   server.max_connections);
       socket.close(ignored);
       return accept();
     }
     auto slot = std::make_shared<ConnectionSlot>(open_connections);
-    std::make_shared<HttpSession>(beast::tcp_stream(std::move(socket)), std::move(peer), site, std::move(slot),
-                                  [this](beast::tcp_stream stream, HttpSession::Request request, std::string who,
-                                         std::shared_ptr<void> held) {
-                                    upgrade(std::move(stream), std::move(request), std::move(who), std::move(held));
-                                  })
-        ->start();
+    auto session = std::make_shared<HttpSession>(
+        beast::tcp_stream(std::move(socket)), std::move(peer), site, std::move(slot),
+        [this](beast::tcp_stream stream, HttpSession::Request request, std::string who, std::shared_ptr<void> held) {
+          upgrade(std::move(stream), std::move(request), std::move(who), std::move(held));
+        });
+    http_sessions.emplace(next_connection_id(), session);
+    session->start();
     accept();
   });
+}
+
+// Unauthenticated connections (plain HTTP, WebSockets no token raised) have a budget of their own;
+// at it, or at max_connections, the oldest of them is closed for the new one. An authenticated
+// WebSocket is never closed for them, so idle or half-sent connections cannot keep STOP out.
+bool WebServer::Impl::make_room() {
+  std::erase_if(http_sessions, [](const auto& entry) { return entry.second.expired(); });
+  std::uint64_t oldest_id = 0;
+  std::function<void()> evict_oldest;
+  std::size_t evictable = 0;
+  for (const auto& [id, weak] : http_sessions)
+    if (const auto http_session = weak.lock(); http_session && http_session->evictable()) {
+      if (++evictable == 1) {
+        oldest_id = id;
+        evict_oldest = [http_session] { http_session->close("closed to make room for a new connection"); };
+      }
+    }
+  {
+    std::lock_guard lock(sessions_mutex);
+    for (const auto& [id, ws] : sessions)
+      if (ws->evictable()) {
+        if (++evictable == 1 || id < oldest_id) {
+          oldest_id = id;
+          evict_oldest = [ws = ws] { ws->close("an unauthenticated WebSocket closed to make room for a new connection"); };
+        }
+      }
+  }
+  const bool full = open_connections.load() >= static_cast<std::size_t>(std::max(0, server.max_connections));
+  const bool at_limit = evictable >= static_cast<std::size_t>(std::max(1, server.max_unauthenticated_connections));
+  if (!full && !at_limit) return true;
+  if (!evict_oldest) return false;
+  evict_oldest();
+  return true;
 }
 
 void WebServer::Impl::upgrade(beast::tcp_stream stream, HttpSession::Request request, std::string peer,
@@ -142,14 +186,11 @@ void WebServer::Impl::upgrade(beast::tcp_stream stream, HttpSession::Request req
   if (stopped) return;  // a request that was on its way while the server stopped: dropped with its socket
   // The operator's role is never granted here: without tokens an observer, a token raises it.
   const Role role = tokens.any_configured() ? Role::none : Role::observer;
-  const WebSocketLimits limits{.max_request_bytes = server.max_request_bytes,
-                               .max_batch_entries = server.max_batch_entries,
-                               .max_pending_requests = static_cast<std::size_t>(std::max(0, server.max_pending_requests)),
-                               .idle_timeout_s = server.idle_timeout_s,
+  const WebSocketLimits limits{.idle_timeout_s = server.idle_timeout_s,
                                .auth_timeout_s = server.auth_timeout_s,
                                .max_unsent_bytes = server.max_unsent_bytes};
-  const std::uint64_t id = next_id++;
-  auto session = std::make_shared<WebSocketSession>(std::move(stream), id, "ws://" + peer, role, limits, dispatcher,
+  const std::uint64_t id = next_connection_id();
+  auto session = std::make_shared<WebSocketSession>(std::move(stream), id, "ws://" + peer, role, limits, gate,
                                                     *workers, budget, std::move(slot), [this](std::uint64_t closed) {
                                                       std::lock_guard lock(sessions_mutex);
                                                       sessions.erase(closed);

@@ -31,12 +31,12 @@ std::string seconds_text(double s) {
 }  // namespace
 
 WebSocketSession::WebSocketSession(beast::tcp_stream stream, std::uint64_t connection_id, std::string peer, Role role,
-                                   WebSocketLimits limits, const RpcDispatcher& dispatcher, WebWorkers& workers,
+                                   WebSocketLimits limits, const RequestGate& gate, WebWorkers& workers,
                                    ByteBudget& budget, std::shared_ptr<void> slot, OnClosed on_closed)
     : ws_(std::move(stream)),
       context_(connection_id, std::move(peer), role),
       limits_(limits),
-      dispatcher_(dispatcher),
+      gate_(gate),
       workers_(workers),
       budget_(budget),
       slot_(std::move(slot)),
@@ -76,7 +76,8 @@ void WebSocketSession::on_accept(const beast::error_code& ec) {
 void WebSocketSession::read() {
   reading_ = true;
   // In pieces, never more than one byte over the limit: a message over it is known before it is in memory.
-  const std::size_t room = limits_.max_request_bytes + 1 - std::min(inbox_.size(), limits_.max_request_bytes);
+  const std::size_t max_bytes = gate_.limits().max_request_bytes;
+  const std::size_t room = max_bytes + 1 - std::min(inbox_.size(), max_bytes);
   ws_.async_read_some(inbox_, room,
                       [self = shared_from_this()](const beast::error_code& ec, std::size_t) { self->on_read(ec); });
 }
@@ -91,9 +92,9 @@ void WebSocketSession::on_read(const beast::error_code& ec) {
     inbox_.consume(inbox_.size());
     return read();
   }
-  if (inbox_.size() > limits_.max_request_bytes) {  // the other connections never see the bytes
+  if (inbox_.size() > gate_.limits().max_request_bytes) {  // the other connections never see the bytes
     spdlog::warn("connection {} ({}): a message over max_request_bytes ({} bytes); closing", context_.connection_id(),
-                 context_.peer(), limits_.max_request_bytes);
+                 context_.peer(), gate_.limits().max_request_bytes);
     inbox_.consume(inbox_.size());
     return finish_after_output("a message over max_request_bytes", websocket::close_code::too_big);
   }
@@ -108,7 +109,7 @@ void WebSocketSession::on_read(const beast::error_code& ec) {
   if (closed_ || closing_) return;
   if (context_.close_requested())
     return finish_after_output("closed after its reply, as a handler asked", websocket::close_code::policy_error);
-  if (unsent_bytes_ > limits_.max_request_bytes) {
+  if (unsent_bytes_ > gate_.limits().max_request_bytes) {
     read_paused_ = true;  // the peer sends faster than it reads its replies: it reads first
     return;
   }
@@ -116,39 +117,26 @@ void WebSocketSession::on_read(const beast::error_code& ec) {
 }
 
 void WebSocketSession::on_message(std::string_view text) {
-  if (text.find_first_not_of(" \t\r\n") == std::string_view::npos) return;
-  nlohmann::json message;
-  try {
-    message = parse_message(text, {.max_depth = 128, .max_batch_entries = limits_.max_batch_entries});
-  } catch (const RpcError& e) {
-    return reply(error_response(nullptr, e));
+  GateDecision d = gate_.admit(text, context_, pending_, [this](Work work, std::size_t count, std::size_t bytes) {
+    return workers_.admit(work, count, bytes);
+  });
+  switch (d.kind) {
+    case GateDecision::Kind::nothing: return;
+    case GateDecision::Kind::answer: return reply(d.answer);
+    case GateDecision::Kind::run: return run_slow(std::move(d));
+    case GateDecision::Kind::close:
+      reply(d.answer);
+      return finish_after_output(d.reason, websocket::close_code::policy_error);
   }
-  const Work work = dispatcher_.work_of(message);
-  if (work == Work::quick) return reply(dispatcher_.handle(message, context_));
-  const std::size_t count = message_size(message);
-  if (pending_ + count > limits_.max_pending_requests)
-    return reply(refuse_message(
-        message, RpcError(rpc_code::too_many_pending,
-                          std::string("more than max_pending_requests (")
-                              .append(std::to_string(limits_.max_pending_requests))
-                              .append(") requests pending on this connection"),
-                          {{"max_pending_requests", limits_.max_pending_requests}})));
-  if (const std::optional<std::string> busy = workers_.admit(work, count, text.size()))
-    return reply(refuse_message(message, RpcError(rpc_code::server_busy, *busy, {{"retry", true}})));
-  run_slow(std::move(message), count, work, text.size());
 }
 
-void WebSocketSession::run_slow(nlohmann::json message, std::size_t count, Work work, std::size_t bytes) {
-  pending_ += count;
-  workers_.run(work, context_.role(), [self = shared_from_this(), message = std::move(message), count, work, bytes] {
-    std::optional<std::string> text;
-    try {
-      if (const auto response = self->dispatcher_.handle(message, self->context_)) text = to_wire(*response);
-    } catch (const std::exception& e) {  // building the reply failed (out of memory): the request gets no answer
-      spdlog::error("connection {}: a reply could not be made: {}", self->context_.connection_id(), e.what());
-    }
-    self->workers_.release(work, count, bytes);
-    boost::asio::post(self->ws_.get_executor(), [self, text = std::move(text), count]() mutable {
+void WebSocketSession::run_slow(GateDecision d) {
+  pending_ += d.count;
+  const Work work = d.work;
+  workers_.run(work, context_.role(), [self = shared_from_this(), d = std::move(d)] {
+    std::optional<std::string> text = self->gate_.run(d.message, self->context_);
+    self->workers_.release(d.work, d.count, d.bytes);
+    boost::asio::post(self->ws_.get_executor(), [self, text = std::move(text), count = d.count]() mutable {
       self->pending_ -= count;
       if (text && !self->closing_) self->queue(std::make_shared<const std::string>(std::move(*text)));
     });
@@ -193,7 +181,7 @@ void WebSocketSession::on_written(const beast::error_code& ec) {
   budget_.give(bytes);
   if (!outbox_.empty()) return write();
   if (closing_) return send_close();
-  if (read_paused_ && !reading_ && unsent_bytes_ <= limits_.max_request_bytes) {
+  if (read_paused_ && !reading_ && unsent_bytes_ <= gate_.limits().max_request_bytes) {
     read_paused_ = false;
     read();
   }

@@ -16,14 +16,13 @@
 
 #include "daemon/byte_budget.hpp"
 #include "daemon/client/json_rpc.hpp"
+#include "daemon/request_gate.hpp"
 #include "daemon/web_workers.hpp"
 
 namespace cmm::daemon {
 
+// The gate's limits apply too: a message over its max_request_bytes closes with 1009 (message too big).
 struct WebSocketLimits {
-  std::size_t max_request_bytes;     // one message; more: closed with 1009 (message too big)
-  std::size_t max_batch_entries;
-  std::size_t max_pending_requests;  // slow requests running or queued
   double idle_timeout_s;             // no frame, not even a pong, for this long: closed
   double auth_timeout_s;             // a connection of role none not authenticated by then: closed
   std::size_t max_unsent_bytes;      // replies and notifications not yet sent; more: dropped
@@ -36,20 +35,23 @@ class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
   using OnClosed = std::function<void(std::uint64_t connection_id)>;
 
   WebSocketSession(boost::beast::tcp_stream stream, std::uint64_t connection_id, std::string peer, Role role,
-                   WebSocketLimits limits, const RpcDispatcher& dispatcher, WebWorkers& workers, ByteBudget& budget,
+                   WebSocketLimits limits, const RequestGate& gate, WebWorkers& workers, ByteBudget& budget,
                    std::shared_ptr<void> slot, OnClosed on_closed);
 
   void start(Request upgrade);  // answers the handshake, then reads
   void send_notification(std::shared_ptr<const std::string> text);
   void close(const std::string& reason);  // at once, without the closing handshake
   RpcContext& context() { return context_; }
+  // Not authenticated by a token (an observer without tokens in cmmd.json is not): the first to go
+  // at the dashboard's connection limits.
+  bool evictable() const { return !closed_ && !closing_ && !context_.authenticated(); }
 
  private:
   void on_accept(const boost::beast::error_code& ec);
   void read();
   void on_read(const boost::beast::error_code& ec);
   void on_message(std::string_view text);
-  void run_slow(nlohmann::json message, std::size_t count, Work work, std::size_t bytes);
+  void run_slow(GateDecision decision);
   void reply(const std::optional<nlohmann::json>& response);
   void queue(std::shared_ptr<const std::string> text);
   void write();
@@ -60,7 +62,7 @@ class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
   boost::beast::websocket::stream<boost::beast::tcp_stream> ws_;
   RpcContext context_;
   WebSocketLimits limits_;
-  const RpcDispatcher& dispatcher_;
+  const RequestGate& gate_;
   WebWorkers& workers_;
   ByteBudget& budget_;
   std::shared_ptr<void> slot_;

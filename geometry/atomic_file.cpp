@@ -2,6 +2,7 @@
 #include "geometry/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -46,13 +47,13 @@ void sync_folder(const std::filesystem::path& folder) {
   if (rc != 0) fail(folder, "fsync of the folder", error);
 }
 
-void write_atomically(const std::filesystem::path& file, std::string_view content) {
+void write_atomically(const std::filesystem::path& file, std::string_view content, std::optional<unsigned> mode) {
   std::string name = ".";  // appended piece by piece: GCC 12 -O3's false -Wrestrict (bug 105329)
   name += file.filename().string();
   name += ".tmp-";
   name += std::to_string(::getpid());
   const std::filesystem::path temp = folder_of(file) / name;
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, mode.value_or(0644));
   if (fd < 0) fail(file, "cannot create the temp file " + temp.string(), errno);
   // Whatever failed, the temp file goes: a full disk gets its space back and no half file stays.
   auto abandon = [&](const std::string& step, int error) {
@@ -60,6 +61,7 @@ void write_atomically(const std::filesystem::path& file, std::string_view conten
     ::unlink(temp.c_str());
     fail(file, step, error);
   };
+  if (mode && ::fchmod(fd, *mode) != 0) abandon("fchmod", errno);  // the umask may not narrow it either
   if (!write_all(fd, content, 0)) abandon("write", errno);
   if (::fsync(fd) != 0) abandon("fsync", errno);
   if (::close(fd) != 0) {

@@ -7,13 +7,16 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string_view>
 
 namespace cmm::geometry {
 
 // Replaces `file` with `content`. On failure the old file, if any, is untouched and no temp file is
-// left behind.
-void write_atomically(const std::filesystem::path& file, std::string_view content);
+// left behind. Given a `mode`, the new file has exactly that one from its creation (a secret is never
+// readable by others, not even for a moment); otherwise 0644 less the umask.
+void write_atomically(const std::filesystem::path& file, std::string_view content,
+                      std::optional<unsigned> mode = std::nullopt);
 
 // The same through `spare`, a file in the same folder whose blocks are already allocated
 // (allocate_spare): `content` is written into them and the spare renamed over `file`, so no new

@@ -41,6 +41,11 @@ std::string request_problem(const json& request) {
 
 }  // namespace
 
+std::uint64_t next_connection_id() {
+  static std::atomic<std::uint64_t> next{1};
+  return next++;
+}
+
 std::vector<std::string> RpcContext::subscribe(const std::vector<std::string>& topics) {
   std::lock_guard lock(topics_mutex_);
   topics_.insert(topics.begin(), topics.end());
@@ -69,17 +74,19 @@ std::vector<std::string> RpcDispatcher::methods() const {
   return names;
 }
 
-Work RpcDispatcher::work_of(const json& message) const {
-  const auto work = [this](const json& request) {
+Work RpcDispatcher::work_of(const json& message, Role role) const {
+  const auto work = [this, role](const json& request) {
     if (!request.is_object()) return Work::quick;
     const auto method = request.find("method");
     if (method == request.end() || !method->is_string()) return Work::quick;
     const auto it = methods_.find(method->get_ref<const std::string&>());
-    return it != methods_.end() ? it->second.work : Work::quick;
+    // A single call above the caller's role is refused without running: at once, never queued.
+    return it != methods_.end() && role >= it->second.role ? it->second.work : Work::quick;
   };
   if (!message.is_array()) return work(message);
+  // A batch may raise its own role (server.auth first): its methods count whatever the role now.
   Work heaviest = Work::quick;
-  for (const json& request : message) heaviest = std::max(heaviest, work(request));
+  for (const json& request : message) heaviest = std::max(heaviest, RpcDispatcher::work_of(request, Role::operator_));
   return heaviest;
 }
 

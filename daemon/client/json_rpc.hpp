@@ -19,17 +19,32 @@
 
 namespace cmm::daemon {
 
+// A connection id no other connection of this process has had, on any transport: jogs and logs
+// tell clients apart by it.
+std::uint64_t next_connection_id();
+
 // One connection as its handlers see it. The role and the topics may change while a slow method
 // runs on a worker thread (server.auth on the io thread), so they are read and written atomically.
 class RpcContext {
  public:
-  RpcContext(std::uint64_t connection_id, std::string peer, Role role)
-      : connection_id_(connection_id), peer_(std::move(peer)), role_(role) {}
+  // `trusted`: the transport itself vouches for the client (the Unix socket's file permissions);
+  // otherwise only a token makes it authenticated.
+  RpcContext(std::uint64_t connection_id, std::string peer, Role role, bool trusted = false)
+      : connection_id_(connection_id), peer_(std::move(peer)), client_(peer_ + " #" + std::to_string(connection_id)),
+        role_(role), authenticated_(trusted) {}
 
   std::uint64_t connection_id() const { return connection_id_; }
   const std::string& peer() const { return peer_; }  // e.g. "tcp://127.0.0.1:50412", for logs
+  // Who the client is across its requests: a connection, or an MQTT requester's reply topic, whose
+  // requests each get a context of their own. A jog belongs to it.
+  const std::string& client() const { return client_; }
+  void set_client(std::string client) { client_ = std::move(client); }
   Role role() const { return role_.load(); }
   void set_role(Role role) { role_.store(role); }
+  // Whether a token (or the transport's own trust) stands behind the role: an unauthenticated
+  // connection is the first to go when the connection limits are reached.
+  bool authenticated() const { return authenticated_.load(); }
+  void mark_authenticated() { authenticated_.store(true); }
   // Set when the connection closes (its client left, or cmmd is stopping): a long handler still
   // running for it stops, since nobody will read its answer.
   bool closed() const { return closed_.load(); }
@@ -46,8 +61,9 @@ class RpcContext {
 
  private:
   std::uint64_t connection_id_;
-  std::string peer_;
+  std::string peer_, client_;
   std::atomic<Role> role_;
+  std::atomic<bool> authenticated_;
   std::atomic<bool> closed_{false}, close_requested_{false};
   std::atomic<int> failed_auths_{0};
   mutable std::mutex topics_mutex_;
@@ -89,8 +105,9 @@ class RpcDispatcher {
   // The same from and to wire text: a line that is not JSON is answered with −32700.
   std::optional<std::string> handle_line(std::string_view line, RpcContext& ctx) const;
 
-  // Where answering the message runs: its heaviest method's place (a batch goes whole).
-  Work work_of(const nlohmann::json& message) const;
+  // Where answering the message for a caller of `role` runs: its heaviest method's place (a batch
+  // goes whole); a single request above the role is quick, since its answer is the refusal.
+  Work work_of(const nlohmann::json& message, Role role = Role::operator_) const;
 
  private:
   nlohmann::json handle_one(const nlohmann::json& request, RpcContext& ctx, bool& reply) const;

@@ -34,12 +34,13 @@ StationLink::StationLink(StationAddress address, Clock::time_point deadline) : a
   MqttConnect& broker = address_.broker;
   if (broker.client_id.empty()) broker.client_id = unique_client_id("cmmctl");
   const std::string base = address_.topic_prefix + "/" + address_.station + "/";
-  request_topic_ = base + "api/request";
+  // The station learns who asks from the topic, which the broker's ACL lets only this user publish
+  // on; it answers only under clients/<that user>/, which only this user may read (docs/fleet.md).
+  const std::string user = broker.username.empty() ? "anonymous" : broker.username;
+  request_topic_ = base + "api/request/" + user;
   jobs_filter_ = base + "jobs/+/+";
   status_topic_ = base + "status";
-  // Under the documented ACL only this user may read under clients/<user>/ (docs/fleet.md).
-  reply_topic_ = address_.topic_prefix + "/clients/" + (broker.username.empty() ? "anonymous" : broker.username) + "/" +
-                 broker.client_id + "/reply";
+  reply_topic_ = address_.topic_prefix + "/clients/" + user + "/" + broker.client_id + "/reply";
   MqttCallbacks callbacks;
   callbacks.connected = [this] {
     // Subscribed before anything is sent: the broker handles one client's packets in order.

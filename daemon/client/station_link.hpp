@@ -1,5 +1,5 @@
 // cmmctl's side of a station on a fleet's broker (docs/fleet.md): JSON-RPC lines out as requests on
-// <prefix>/<station>/api/request (the token as a user property), replies in on this client's own
+// <prefix>/<station>/api/request/<user> (the token as a user property), replies in on this client's own
 // response topic <prefix>/clients/<user>/<client id>/reply, and the station's job topics turned
 // into job.state and job.progress notifications, so RpcClient works over it as over a socket.
 #pragma once

@@ -1,6 +1,7 @@
 // The dashboard's entry: takes the token from the address (#token=…, then out of the address bar
-// and into this tab's sessionStorage), connects to cmmd's WebSocket, shows the role granted, and
-// routes #/station, #/queue, #/job/<id> and #/history to their pages.
+// and into this tab's sessionStorage) at load and whenever the address changes, connects to cmmd's
+// WebSocket, shows the role granted, and routes #/station, #/queue, #/job/<id> and #/history to
+// their pages. The station's token outlives a restart of cmmd, so a tab reconnects with its own.
 import {Rpc} from './rpc.js';
 import {$, apply_role, show_message, clear_message} from './ui.js';
 import * as station from './station.js';
@@ -8,10 +9,17 @@ import * as queue from './queue.js';
 import * as job_page from './job_page.js';
 import * as history from './history.js';
 
+// The token in the address, if any, moved into sessionStorage (so it is not left in the address
+// bar, the history or a screenshot); else the one this tab has kept.
 function take_token() {
   const m = /^#token=([^&]*)/.exec(location.hash);
   if (m) {
-    const token = decodeURIComponent(m[1]);
+    let token = m[1];
+    try {
+      token = decodeURIComponent(token);
+    } catch (e) {
+      // A malformed escape: taken as typed, and cmmd says whether it is a token.
+    }
     sessionStorage.setItem('cmmd.token', token);
     history_replace('#/station');
     return token;
@@ -35,6 +43,14 @@ const pages = {station, queue, job: job_page, history};
 let shown = null;
 
 function route() {
+  // A pasted dashboard URL (#token=…) is a new token whenever it comes, not only at load.
+  if (/^#token=/.test(location.hash)) {
+    const pasted = take_token();
+    if (pasted !== rpc.token) {
+      ctx.token = pasted;
+      rpc.set_token(pasted);
+    }
+  }
   const m = /^#\/(station|queue|history)$|^#\/job\/(\d+)$/.exec(location.hash);
   if (!m) history_replace('#/station');
   const name = !m ? 'station' : m[2] ? 'job' : m[1];
@@ -61,6 +77,7 @@ rpc.on_open((role) => {
   r.className = `pill ${role === 'operator' ? 'good' : role === 'observer' ? 'warn' : 'bad'}`;
   apply_role(role);
   if (role === 'none') show_message(`cmmd refused this page's token (${rpc.auth_error || 'no token'}): open the dashboard URL cmmd logged, with its #token=`);
+  else if (rpc.auth_error) show_message(`cmmd refused this page's token (${rpc.auth_error}): watching only; for the operator's role open the dashboard URL (cmmctl dashboard)`);
   else if ($('message').className === 'lost') clear_message();
 });
 rpc.on_close(() => {

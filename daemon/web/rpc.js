@@ -37,6 +37,15 @@ export class Rpc {
   }
 
   on_open(fn) { this.listeners.open.push(fn); }
+
+  // A token pasted into the address bar: connects again with it (a token can raise a connection's
+  // role, never lower it, so a new connection is the one way to take exactly what it grants).
+  set_token(token) {
+    this.token = token;
+    this.auth_error = undefined;
+    this.retry_ms = 0;
+    if (this.ws && this.ws.readyState <= WebSocket.OPEN) this.ws.close();
+  }
   on_close(fn) { this.listeners.close.push(fn); }
 
   open() {
@@ -56,14 +65,22 @@ export class Rpc {
       if (was) for (const fn of this.listeners.close) fn();
       // Back off up to 5 s: a restarting cmmd is back within seconds.
       setTimeout(() => this.open(), this.retry_ms);
-      this.retry_ms = Math.min(5000, this.retry_ms * 2);
+      this.retry_ms = Math.min(5000, Math.max(500, this.retry_ms * 2));
     };
   }
 
   async greet() {
+    this.auth_error = undefined;
     try {
       if (this.token) {
-        this.role = (await this.send('server.auth', {token: this.token})).role;
+        try {
+          this.role = (await this.send('server.auth', {token: this.token})).role;
+        } catch (e) {
+          // A token no longer valid (rotated): the connection keeps what it has without one (an
+          // observer where cmmd.json sets no tokens), so the tab still shows the station and STOP.
+          this.auth_error = describe_error(e);
+          this.role = (await this.send('server.info', {})).role;
+        }
       } else {
         this.role = (await this.send('server.info', {})).role;
       }

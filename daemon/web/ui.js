@@ -52,6 +52,8 @@ export function apply_role(role) {
   current_role = role;
   document.body.dataset.role = role;
   for (const b of document.querySelectorAll('.act')) b.disabled = role !== 'operator';
+  // A stop is always safe: everyone who can see the station may stop it, observers too.
+  for (const b of document.querySelectorAll('.stop-any')) b.disabled = role === 'none';
 }
 
 export function role() { return current_role; }

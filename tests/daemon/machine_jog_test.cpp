@@ -86,7 +86,7 @@ class MachineJogTest : public ::testing::Test {
   // The RpcError a jog is refused with (a failure when it is not refused).
   RpcError refusal(const JogRequest& r) {
     try {
-      jog_->jog(r);
+      jog_->jog(r, "client A");
     } catch (const RpcError& e) {
       return e;
     }
@@ -107,7 +107,7 @@ class MachineJogTest : public ::testing::Test {
 TEST_F(MachineJogTest, AStepJogEndsAtItsStartPlusDirectionTimesDistanceInSegmentsOfAtMostSegmentS) {
   start({100, 100, 100});
   const hal::Vec3 d = hal::Vec3(1, 2, -2).normalized();
-  const MachineJog::Started s = jog_->jog(step({1, 2, -2}, 12));
+  const MachineJog::Started s = jog_->jog(step({1, 2, -2}, 12), "client A");
   EXPECT_FALSE(s.renewed);
   EXPECT_LT((s.position - hal::Vec3(100, 100, 100)).norm(), 1e-9);
   const JogEnd end = wait_for_end();
@@ -131,7 +131,7 @@ TEST_F(MachineJogTest, AStepJogEndsAtItsStartPlusDirectionTimesDistanceInSegment
 
 TEST_F(MachineJogTest, AJogTowardAFaceStopsAtTheFaceLessTheBallRadiusAndTheNextOneThatWayIsRefused) {
   start({688, 100, 100});
-  jog_->jog(step({1, 0, 0}, 100));
+  jog_->jog(step({1, 0, 0}, 100), "client A");
   const JogEnd at_face = wait_for_end();
   EXPECT_FALSE(at_face.fault) << at_face.reason;
   EXPECT_EQ(at_face.reason, "at the travel box's +x face");
@@ -146,14 +146,14 @@ TEST_F(MachineJogTest, AJogTowardAFaceStopsAtTheFaceLessTheBallRadiusAndTheNextO
     EXPECT_NE(std::string(e.what()).find("+x face (x ≤ 699.000"), std::string::npos) << e.what();
   }
   EXPECT_EQ(moves(), before) << "a refused jog does not move";
-  jog_->jog(step({-1, 0, 0}, 4));
+  jog_->jog(step({-1, 0, 0}, 4), "client A");
   EXPECT_EQ(wait_for_end().reason, "travelled 4.000 mm");
   EXPECT_NEAR(ball().x(), 695, 1e-9);
 }
 
 TEST_F(MachineJogTest, ABallHomedToTheBoxCornerJogsBackInAlongAnAxisItIsAtTheFaceOf) {
   start({700, 900, 450});  // the default home: every + face at once
-  jog_->jog(step({0, 0, -1}, 5));
+  jog_->jog(step({0, 0, -1}, 5), "client A");
   const JogEnd end = wait_for_end();
   EXPECT_FALSE(end.fault) << end.reason;
   EXPECT_LT((ball() - hal::Vec3(700, 900, 445)).norm(), 1e-9);
@@ -164,7 +164,7 @@ TEST_F(MachineJogTest, AContactStopsTheJogWithEarlyTriggerAndTheMachineGoesNoFur
   // Above the plate near corner 2, clear of the part: the ball meets the plate's top (z = 0) at z = 1.
   start({390, 310, 8});
   const std::size_t none = moves();
-  jog_->jog(step({0, 0, -1}, 20));
+  jog_->jog(step({0, 0, -1}, 20), "client A");
   const JogEnd end = wait_for_end();
   ASSERT_TRUE(end.fault) << end.reason;
   EXPECT_EQ(*end.fault, hal::FaultKind::early_trigger) << end.reason;
@@ -185,7 +185,7 @@ TEST_F(MachineJogTest, AContactStopsTheJogWithEarlyTriggerAndTheMachineGoesNoFur
   EXPECT_NEAR(ball().z(), 1, 0.01);
 
   // Backing off needs no reset: the opposite way leaves the contact, and the fault clears.
-  jog_->jog(step({0, 0, 1}, 3));
+  jog_->jog(step({0, 0, 1}, 3), "client A");
   const JogEnd back = wait_for_end();
   EXPECT_FALSE(back.fault) << back.reason;
   EXPECT_NEAR(ball().z(), 4, 0.01);
@@ -195,10 +195,10 @@ TEST_F(MachineJogTest, AContactStopsTheJogWithEarlyTriggerAndTheMachineGoesNoFur
 TEST_F(MachineJogTest, AHeldJogRunsWhileRenewedAndStopsWithinHoldAndASegmentOnceReleased) {
   start({100, 100, 100}, {5, 0.1});
   const Clock::time_point t0 = Clock::now();
-  const MachineJog::Started first = jog_->jog(held({1, 0, 0}, 5, 0.3));
+  const MachineJog::Started first = jog_->jog(held({1, 0, 0}, 5, 0.3), "client A");
   // Renewed every 50 ms for 0.8 s, as a dashboard button held down is re-sent.
   while (since(t0) < 0.8) {
-    const MachineJog::Started again = jog_->jog(held({1, 0, 0}, 5, 0.3));
+    const MachineJog::Started again = jog_->jog(held({1, 0, 0}, 5, 0.3), "client A");
     EXPECT_TRUE(again.renewed);
     EXPECT_EQ(again.id, first.id);
     std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the client's cadence, not a wait for a result
@@ -216,10 +216,43 @@ TEST_F(MachineJogTest, AHeldJogRunsWhileRenewedAndStopsWithinHoldAndASegmentOnce
   EXPECT_LT(std::abs(ball().y() - 100) + std::abs(ball().z() - 100), 1e-9);
 }
 
+// Two dashboards, one jog: while client A's jog runs, client B can neither renew nor replace it, so it
+// ends when its owner lets go, whatever B keeps sending; after that B's call starts a jog of its own.
+// Either may stop a jog.
+TEST_F(MachineJogTest, OnlyTheClientThatStartedAJogRenewsItAndAnyClientStopsIt) {
+  start({100, 100, 100}, {5, 0.1});
+  const Clock::time_point t0 = Clock::now();
+  const MachineJog::Started a = jog_->jog(held({1, 0, 0}, 5, 0.3), "client A");
+  int refused = 0;
+  std::optional<MachineJog::Started> own;  // B's first call taken: a jog of B's own
+  while (!own && since(t0) < 2.0) {  // B keeps "holding" its button; A let go at once
+    try {
+      own = jog_->jog(held({1, 0, 0}, 5, 0.3), "client B");
+    } catch (const RpcError& e) {
+      EXPECT_EQ(e.code(), rpc_code::machine_busy);
+      EXPECT_NE(std::string(e.what()).find("another client (client A)"), std::string::npos) << e.what();
+      ++refused;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the client's cadence, not a wait for a result
+  }
+  ASSERT_TRUE(own) << "B never got a jog of its own";
+  const std::optional<JogEnd> a_end = jog_->last_end();
+  ASSERT_TRUE(a_end);
+  EXPECT_EQ(a_end->id, a.id) << "A's jog had not ended when B's was taken";
+  EXPECT_EQ(a_end->reason, "released (no machine.jog within hold_s)");
+  EXPECT_NE(own->id, a.id);
+  EXPECT_FALSE(own->renewed) << "B renewed A's jog";
+  EXPECT_GT(refused, 2) << "B's calls while A's jog ran";
+  EXPECT_LE(own->position.x() - 100, 5 * (0.3 + 0.1) + 1e-9) << "A's jog ran on after its owner let go";
+
+  jog_->stop();  // as machine.jog_stop from client A: a stop needs no ownership
+  EXPECT_EQ(wait_for_end().reason, "stopped by machine.jog_stop");
+}
+
 TEST_F(MachineJogTest, AJogNeverRenewedStopsWithinHoldAndOneSegment) {
   start({100, 100, 100}, {5, 0.1});
   const Clock::time_point t0 = Clock::now();
-  jog_->jog(held({0, -1, 0}, 5, 0.3));
+  jog_->jog(held({0, -1, 0}, 5, 0.3), "client A");
   const JogEnd end = wait_for_end();
   EXPECT_EQ(end.reason, "released (no machine.jog within hold_s)");
   EXPECT_LE(since(t0), 0.3 + 0.1 + kSlackS);
@@ -229,8 +262,8 @@ TEST_F(MachineJogTest, AJogNeverRenewedStopsWithinHoldAndOneSegment) {
 
 TEST_F(MachineJogTest, ADifferentDirectionReplacesTheJogAndJogStopEndsIt) {
   start({100, 100, 100}, {5, 0.1});
-  const MachineJog::Started x = jog_->jog(held({1, 0, 0}, 5, 1));
-  const MachineJog::Started y = jog_->jog(held({0, 1, 0}, 5, 1));
+  const MachineJog::Started x = jog_->jog(held({1, 0, 0}, 5, 1), "client A");
+  const MachineJog::Started y = jog_->jog(held({0, 1, 0}, 5, 1), "client A");
   EXPECT_NE(y.id, x.id);
   EXPECT_FALSE(y.renewed);
   const auto deadline = Clock::now() + std::chrono::seconds(5);
@@ -249,7 +282,7 @@ TEST_F(MachineJogTest, ADifferentDirectionReplacesTheJogAndJogStopEndsIt) {
 
 TEST_F(MachineJogTest, MachineStopEndsAJog) {
   start({100, 100, 100}, {5, 0.1});
-  jog_->jog(held({0, 0, 1}, 5, 1));
+  jog_->jog(held({0, 0, 1}, 5, 1), "client A");
   link_->count_stop();  // what machine.stop does, with the machine's own stop
   link_->cmm().stop();
   const JogEnd end = wait_for_end(2);
@@ -268,7 +301,7 @@ TEST_F(MachineJogTest, RefusedWhileAJobHoldsTheMachineAndWhenNotHomed) {
   }
   EXPECT_EQ(moves(), 0u);
   // While a jog runs, the machine is its: machine.home (or a job) finds it busy.
-  jog_->jog(held({1, 0, 0}, 5, 1));
+  jog_->jog(held({1, 0, 0}, 5, 1), "client A");
   EXPECT_EQ(link_->holder().value_or(""), "machine.jog");
   jog_->stop();
   wait_for_end();

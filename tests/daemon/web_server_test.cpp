@@ -1,6 +1,6 @@
 // The dashboard server's rules without a socket: URL paths to files (no "..", encoded or not, no
-// symlink out of the root), content types, routes, the Host and Origin checks, the token book and
-// the dashboard token, and cmmd.json's "http" block. The real server is in tests/integration/cmmd_web_test.cpp.
+// symlink out of the root), content types, routes, the Host and Origin checks, the dashboard's URL,
+// and cmmd.json's "http" block. The real server is in tests/integration/cmmd_web_test.cpp.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -11,7 +11,6 @@
 #include "daemon/dashboard_access.hpp"
 #include "daemon/host_origin_check.hpp"
 #include "daemon/static_files.hpp"
-#include "daemon/token_book.hpp"
 #include "daemon/web_routes.hpp"
 #include "hal/description/json_fields.hpp"
 #include "tests/daemon/fresh_folder.hpp"
@@ -158,50 +157,6 @@ TEST(HostOriginCheck, TheOriginMustBeThePagesOwnOrAnAllowedOne) {
   EXPECT_FALSE(origin_allowed("https://127.0.0.1:7621", "127.0.0.1:7621", rules));
   EXPECT_FALSE(origin_allowed("null", "127.0.0.1:7621", rules));  // a file:// page or a sandboxed frame
   EXPECT_FALSE(origin_allowed("http://127.0.0.1:7621", "", rules));
-}
-
-TEST(TokenBook, GrantsTheBestRoleAndAGeneratedTokenDoesNotCountAsConfigured) {
-  TokenBook book({{"observer-token-0123456789", Role::observer}}, 5, 20);
-  EXPECT_TRUE(book.any_configured());
-  EXPECT_EQ(book.check("observer-token-0123456789").role, Role::observer);
-  EXPECT_FALSE(book.check("observer-token-012345678").role);  // a prefix is not the token
-  book.add_generated({"generated-operator-token", Role::operator_});
-  EXPECT_EQ(book.check("generated-operator-token").role, Role::operator_);
-  book.set_configured({});
-  EXPECT_FALSE(book.any_configured());
-  EXPECT_FALSE(book.check("observer-token-0123456789").role);
-  EXPECT_EQ(book.check("generated-operator-token").role, Role::operator_);  // kept over SIGHUP
-}
-
-TEST(TokenBook, WrongGuessesBeyondTheBurstAreNotEvenCompared) {
-  TokenBook book({{"observer-token-0123456789", Role::observer}}, 0.001, 2);
-  EXPECT_FALSE(book.check("wrong-1").throttled);
-  EXPECT_FALSE(book.check("wrong-2").throttled);
-  const TokenCheck refused = book.check("observer-token-0123456789");
-  EXPECT_TRUE(refused.throttled);
-  EXPECT_FALSE(refused.role);
-  EXPECT_GT(refused.retry_after_s, 0);
-}
-
-TEST(DashboardAccess, WithoutConfiguredTokensAnOperatorTokenIsMadeAndKeptInA0600File) {
-  const fs::path dir = fresh_folder("dashboard-token");
-  TokenBook book({}, 5, 20);
-  const std::string token = set_up_dashboard_token(book, dir / "dashboard.token");
-  EXPECT_EQ(token.size(), 64u);
-  EXPECT_TRUE(std::all_of(token.begin(), token.end(), [](char c) { return std::isxdigit(static_cast<unsigned char>(c)); }));
-  std::string on_disk;
-  std::ifstream(dir / "dashboard.token") >> on_disk;
-  EXPECT_EQ(on_disk, token);
-  struct stat st {};
-  ASSERT_EQ(::stat((dir / "dashboard.token").c_str(), &st), 0);
-  EXPECT_EQ(st.st_mode & 0777, 0600u);
-  EXPECT_EQ(book.check(token).role, Role::operator_);
-  EXPECT_FALSE(book.any_configured());  // TCP stays operator without tokens
-  EXPECT_NE(set_up_dashboard_token(book, dir / "dashboard.token"), token);  // a new one each start
-
-  TokenBook configured({{"observer-token-0123456789", Role::observer}}, 5, 20);
-  EXPECT_EQ(set_up_dashboard_token(configured, dir / "dashboard.token"), "");
-  EXPECT_FALSE(fs::exists(dir / "dashboard.token"));  // a stale token must not mislead
 }
 
 TEST(DashboardAccess, TheUrlNamesTheBindAddressAndCarriesTheTokenInItsFragment) {

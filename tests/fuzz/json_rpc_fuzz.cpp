@@ -1,6 +1,8 @@
 // Fuzzes cmmd's JSON-RPC entry: a connection's bytes framed into lines as daemon/rpc_session.cpp does
 // ('\n', a '\r' before it dropped, blank lines skipped, a last line without '\n' dropped), each line
-// through parse_message and RpcDispatcher as RpcSession::on_line does, with the real server.auth and
+// through the request gate of the line protocol (RequestGate, Framing::lines: HTTP and, before
+// server.auth, anything but a JSON object or array close the connection) as RpcSession::on_line
+// does, slow methods run at once as a worker would, with the real server.auth and
 // server.subscribe of an RpcServer that is never started, and the application methods' request
 // parsing (job.submit, plan.preview, registration.fit, machine.jog, model.upload's base64) behind their roles. The framing itself is
 // private to RpcSession and needs a socket, so it is mirrored here, not called.
@@ -20,6 +22,7 @@
 #include "daemon/job_request.hpp"
 #include "daemon/machine_jog.hpp"
 #include "daemon/client/json_rpc.hpp"
+#include "daemon/request_gate.hpp"
 #include "daemon/rpc_server.hpp"
 #include "fuzz_support.hpp"
 #include "planner/registration.hpp"
@@ -36,6 +39,7 @@ struct Harness {
   RpcDispatcher dispatcher;
   DaemonConfig config = daemon_config_from_json(json::object(), "<fuzz>", "/nonexistent");
   std::optional<RpcServer> server;
+  std::optional<RequestGate> gate;
 
   Harness() {
     spdlog::set_level(spdlog::level::off);
@@ -105,26 +109,27 @@ struct Harness {
     // Wrong guesses from earlier inputs must not throttle server.auth for the later ones.
     options.auth_guess_burst = 1e15;
     server.emplace(io, dispatcher, options);
+    gate.emplace(dispatcher, GateLimits{}, Framing::lines);
   }
 
-  // RpcSession::on_line, with the reply turned into its wire text.
-  void on_line(std::string_view line, RpcContext& ctx) const {
-    if (line.find_first_not_of(" \t") == std::string_view::npos) return;
-    json message;
-    try {
-      message = parse_message(line);
-    } catch (const RpcError& e) {
-      (void)to_wire(error_response(nullptr, e));
-      return;
+  // RpcSession::on_line: the gate's decision carried out, the reply turned into its wire text; false
+  // once the connection would be closed.
+  bool on_line(std::string_view line, RpcContext& ctx) const {
+    if (gate->refuse_partial(line.substr(0, line.size() / 2), ctx)) {
+      // What closes a line's first half closes the whole line.
+      if (gate->admit(line, ctx, 0, admit_all).kind != GateDecision::Kind::close) __builtin_trap();
     }
-    if (dispatcher.work_of(message) != Work::quick) {
-      // The reply when the connection is over max_pending_requests, then the worker's answer.
-      (void)message_size(message);
-      if (const auto refused = refuse_message(message, RpcError(rpc_code::too_many_pending, "too many")))
-        (void)to_wire(*refused);
+    const GateDecision d = gate->admit(line, ctx, 0, admit_all);
+    if (d.kind == GateDecision::Kind::close) {
+      // A line that looks like HTTP never reaches a method, whatever the role.
+      if (!looks_like_http(line) && ctx.authenticated() && !d.answer) __builtin_trap();
+      return false;
     }
-    if (const auto response = dispatcher.handle(message, ctx)) (void)to_wire(*response);
+    if (d.answer) (void)to_wire(*d.answer);
+    if (d.kind == GateDecision::Kind::run) (void)gate->run(d.message, ctx);
+    return !ctx.close_requested();
   }
+  static std::optional<std::string> admit_all(Work, std::size_t, std::size_t) { return std::nullopt; }
 };
 
 }  // namespace
@@ -139,7 +144,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::string_view line = bytes.substr(begin, end - begin);
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     begin = end + 1;
-    harness.on_line(line, ctx);
+    if (!harness.on_line(line, ctx)) return 0;
   }
   // The bytes after the last newline: RpcSession drops them at EOF; handle_line is the other entry.
   if (begin < bytes.size()) (void)harness.dispatcher.handle_line(bytes.substr(begin), ctx);
