@@ -185,7 +185,8 @@ TEST_F(Fleet, AnObserverUnderTheDocumentedAclReadsNoRequestNorReplyOfAnother) {
   auto alpha = station("alpha", testing::sample_sim_block());
   // Everything the observer may ask for, wildcards and all.
   testing::MqttListener viewer(broker_->port(), "viewer", "viewer-pw",
-                               {"#", "cmmd/#", "cmmd/alpha/api/request", "cmmd/clients/#", "cmmd/clients/ops/#"});
+                               {"#", "cmmd/#", "cmmd/alpha/api/request/#", "cmmd/alpha/api/request/ops",
+                                "cmmd/clients/#", "cmmd/clients/ops/#"});
   viewer.wait_for("alpha's status (what it may read)", [&](const auto& m) { return is_topic(m, "cmmd/alpha/status"); }, 10);
 
   daemon::RpcClient ops = station_client(broker_->port(), "alpha", "ops", kOperatorToken);
@@ -200,6 +201,28 @@ TEST_F(Fleet, AnObserverUnderTheDocumentedAclReadsNoRequestNorReplyOfAnother) {
     EXPECT_EQ(m.payload.find(kOperatorToken), std::string::npos) << m.topic;
     EXPECT_FALSE(m.topic.starts_with("cmmd/clients/ops/")) << "the observer read ops's reply: " << m.topic;
   }
+
+  // A request in ops's name with the operator's token (stolen, say, but not ops's broker password),
+  // its answer asked for under ops's replies: the ACL lets viewer publish under its own name only, so
+  // the station never sees it. Then a request of viewer's own and one of ops's: once ops's reply is
+  // in, the station has answered everything before it, in the order it came.
+  testing::MqttListener ops_replies(broker_->port(), "ops", "ops-pw", {"cmmd/clients/ops/#"});
+  daemon::MqttMessage forged;
+  forged.topic = "cmmd/alpha/api/request/ops";
+  forged.response_topic = "cmmd/clients/ops/forged/reply";
+  forged.payload = R"({"jsonrpc":"2.0","id":1,"method":"job.list"})";
+  forged.user_properties.emplace_back("token", kOperatorToken);
+  forged.qos = 1;
+  ASSERT_TRUE(viewer.client().publish(forged));
+  daemon::MqttMessage own_name = forged;
+  own_name.topic = "cmmd/alpha/api/request/viewer";
+  own_name.response_topic = "cmmd/clients/viewer/own/reply";
+  ASSERT_TRUE(viewer.client().publish(own_name));
+  viewer.wait_for("the reply under viewer's own name", [](const auto& m) { return m.topic == "cmmd/clients/viewer/own/reply"; }, 10);
+  EXPECT_TRUE(ops.call("job.list").at("jobs").empty());
+  ops_replies.wait_for("ops's own reply", [](const auto& m) { return m.topic.ends_with("/reply") && m.topic.find("forged") == std::string::npos; }, 10);
+  for (const daemon::MqttMessage& m : ops_replies.messages())
+    EXPECT_NE(m.topic, "cmmd/clients/ops/forged/reply") << "a request published in another user's name was answered";
 }
 
 // The documented set-up: the broker takes TLS only. cmmd and cmmctl verify its certificate against

@@ -74,6 +74,20 @@ daemon::RpcClient CmmdInstance::tcp_client() const {
   return daemon::RpcClient::connect("tcp://127.0.0.1:" + std::to_string(tcp_port_));
 }
 
+std::string CmmdInstance::station_token() const {
+  std::ifstream in(folder_ / "state" / "operator.token");
+  std::string token;
+  std::getline(in, token);
+  if (token.empty()) throw std::runtime_error("no station token in " + (folder_ / "state" / "operator.token").string());
+  return token;
+}
+
+daemon::RpcClient CmmdInstance::operator_tcp_client() const {
+  daemon::RpcClient client = tcp_client();
+  client.call("server.auth", {{"token", station_token()}});
+  return client;
+}
+
 std::filesystem::path CmmdInstance::job_folder(int id) const {
   char name[16];
   std::snprintf(name, sizeof name, "%06d", id);

@@ -33,7 +33,9 @@ class CmmdInstance {
   ChildProcess& process() { return *process_; }
 
   daemon::RpcClient client() const;      // over the Unix socket (operator)
-  daemon::RpcClient tcp_client() const;  // over TCP
+  daemon::RpcClient tcp_client() const;           // over TCP, not authenticated: role none
+  daemon::RpcClient operator_tcp_client() const;  // over TCP, authenticated by the station token
+  std::string station_token() const;              // <state_dir>/operator.token
   int tcp_port() const { return tcp_port_; }
   int http_port() const { return http_port_; }  // the dashboard's; 0 when http.enabled is false
   const std::filesystem::path& folder() const { return folder_; }

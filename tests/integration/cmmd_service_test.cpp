@@ -216,11 +216,12 @@ TEST(CmmdAccess, TcpNeedsATokenObserversWatchOperatorsMoveAndTheUnixSocketIsOper
   EXPECT_EQ(observer.call("server.auth", {{"token", kObserverToken}})["role"], "observer");
   EXPECT_EQ(observer.call("machine.status")["driver"], "sim");
   EXPECT_TRUE(observer.call("job.list")["jobs"].is_array());
-  for (const char* method : {"machine.home", "job.submit", "model.upload", "machine.stop", "job.cancel"}) {
+  for (const char* method : {"machine.home", "job.submit", "model.upload", "machine.abort", "job.cancel"}) {
     e = error_of(observer, method, {{"job", 1}});
     EXPECT_EQ(e.code(), rpc_code::unauthorized) << method << ": " << e.what();
     EXPECT_EQ(e.data()["needed"], "operator") << method;
   }
+  EXPECT_EQ(observer.call("machine.stop"), json::object()) << "a stop is always safe: observers may stop";
   // A failed auth leaves the observer an observer.
   EXPECT_EQ(error_of(observer, "server.auth", {{"token", "not-a-token-0123456789"}}).code(), rpc_code::auth_failed);
   EXPECT_EQ(observer.call("server.info")["role"], "observer");
@@ -282,7 +283,7 @@ TEST(CmmdLoad, AHundredClientsPollingWhileAJobRunsAreAllAnswered) {
     clients.emplace_back([&, i] {
       try {
         // Half over TCP, half over the Unix socket; each waits for a job notification between polls.
-        RpcClient c = i % 2 == 0 ? cmmd.tcp_client() : cmmd.client();
+        RpcClient c = i % 2 == 0 ? cmmd.operator_tcp_client() : cmmd.client();
         c.call("server.subscribe", {{"topics", {"job", "machine"}}});
         bool probing = false;
         for (;;) {

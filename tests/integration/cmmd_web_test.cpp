@@ -49,11 +49,7 @@ json web_root_config(const fs::path& dir) {
   return {{"http", {{"web_root", (dir / "web").string()}}}};
 }
 
-std::string read_token(const CmmdInstance& cmmd) {
-  std::string token;
-  std::ifstream(cmmd.folder() / "state" / "dashboard.token") >> token;
-  return token;
-}
+std::string read_token(const CmmdInstance& cmmd) { return cmmd.station_token(); }
 
 TEST(CmmdWeb, ServesTheWebRootAndDebiansLibrariesAndNothingOutsideThem) {
   const fs::path dir = daemon::fresh_folder("web-files");
@@ -175,7 +171,7 @@ TEST(CmmdWeb, JsonRpcOverTheWebSocketObservesUntilTheDashboardTokenAndGetsNotifi
   }
   EXPECT_EQ(ws.error_of("server.auth", {{"token", "not-the-token-0123456789"}}).code(), rpc_code::auth_failed);
 
-  // The token cmmd made for the dashboard, from the state folder (0600), raises it to operator.
+  // The station token, from the state folder (0640), raises it to operator.
   const std::string token = read_token(cmmd);
   ASSERT_EQ(token.size(), 64u);
   EXPECT_EQ(ws.call("server.auth", {{"token", token}})["role"], "operator");
@@ -183,9 +179,9 @@ TEST(CmmdWeb, JsonRpcOverTheWebSocketObservesUntilTheDashboardTokenAndGetsNotifi
   EXPECT_EQ(url, "http://127.0.0.1:" + std::to_string(cmmd.http_port()) + "/#token=" + token);
   EXPECT_EQ(ws.call("machine.status")["driver"], "sim");
 
-  // TCP is unchanged: no tokens in cmmd.json, so TCP is operator; the token works there too.
+  // TCP is operator only by a token, the same station token.
   daemon::RpcClient tcp = cmmd.tcp_client();
-  EXPECT_EQ(tcp.call("server.info")["role"], "operator");
+  EXPECT_EQ(tcp.call("server.info")["role"], "none");
   EXPECT_EQ(tcp.call("server.auth", {{"token", token}})["role"], "operator");
   const auto ctl = cmm::test::run_command(std::string(CMMD_BINARY_DIR "/daemon/cmmctl --endpoint unix:") +
                                           (cmmd.folder() / "run" / "cmmd.sock").string() + " dashboard");
@@ -229,7 +225,7 @@ TEST(CmmdWeb, AnOversizedMessageClosesItsConnectionAndNoOther) {
   EXPECT_EQ(big.close_code(), 1009);  // message too big
 
   EXPECT_EQ(bystander.call("server.info")["role"], "observer");
-  EXPECT_EQ(cmmd.tcp_client().call("server.info")["role"], "operator");
+  EXPECT_EQ(cmmd.operator_tcp_client().call("server.info")["role"], "operator");
   WebSocketClient next(cmmd.http_port());
   const std::string fits = R"({"jsonrpc":"2.0","id":1,"method":"server.info","params":{"pad":")" + std::string(60000, 'x') + R"("}})";
   ASSERT_TRUE(next.send_text(fits));
@@ -243,9 +239,9 @@ TEST(CmmdWeb, WithTokensTheWebSocketStartsWithNoRoleAndReportsNeedAToken) {
   const fs::path dir = daemon::fresh_folder("web-tokens");
   CmmdInstance cmmd(dir / "cmmd", {{"driver", "sim"}},
                     {{"server", {{"tokens", testing::observer_and_operator_tokens(kObserverToken, kOperatorToken)}}}});
-  write_file(dir / "cmmd" / "state" / "dashboard.token", "stale\n");
+  write_file(dir / "cmmd" / "state" / "operator.token", std::string(64, 'a') + "\n");
   cmmd.start();
-  EXPECT_FALSE(fs::exists(dir / "cmmd" / "state" / "dashboard.token")) << "a stale dashboard token is removed";
+  EXPECT_FALSE(fs::exists(dir / "cmmd" / "state" / "operator.token")) << "a stale station token is removed";
 
   WebSocketClient ws(cmmd.http_port());
   EXPECT_EQ(ws.call("server.info")["role"], "none");

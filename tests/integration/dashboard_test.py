@@ -8,7 +8,7 @@ sample scan by a drop on the upload area, submits a job with its plate corners, 
 sample part as the nominal, and checks that the 3-D view draws the mesh and the planned points, that
 the touches count up live, that STOP pauses the running job and Resume continues it, that the done
 job shows its verdict, the deviation legend and a clicked point's figures, that an observer sees the
-jobs but cannot act (its buttons disabled, a forced call refused with a message), and that neither
+jobs but cannot act (its buttons disabled but STOP, a forced call refused with a message), and that neither
 page logged a console error. Screenshots of each stage go to --artifacts (or $CMMD_TEST_ARTIFACTS).
 
 Waits are WebDriverWait polls with deadlines, never fixed sleeps. Run by ctest (tests/CMakeLists.txt)
@@ -260,7 +260,7 @@ def main():
         acts = observer.execute_script(
             "return [...document.querySelectorAll('.act')].map(b => [b.id || b.dataset.action || b.textContent, b.disabled]);")
         assert len(acts) > 10 and all(disabled for _, disabled in acts), f'an act button is enabled for the observer: {acts}'
-        assert not observer.find_element(By.ID, 'stop').is_enabled()
+        assert observer.find_element(By.ID, 'stop').is_enabled(), 'a stop is always safe: an observer may STOP'
         observer.execute_script(
             'const b = document.querySelector(arguments[0]); b.disabled = false; b.click();',
             f'{row} button[data-action=resume]')
