@@ -86,7 +86,9 @@ TokenCheck TokenBook::check(const std::string& guess, const std::string& source)
   Source& from = sources_.try_emplace(source, Source{AuthThrottle(guesses_per_s_, guess_burst_)}).first->second;
   from.last = AuthThrottle::Clock::now();
   if (from.throttle.allow()) {
-    from.refusing = false;
+    // Logged again only once the source has been quiet long enough to earn its whole allowance
+    // back: a guesser kept at the edge of it is one line, not one per refill.
+    if (from.throttle.full()) from.refusing = false;
     from.throttle.record_failure();
     return {};
   }
