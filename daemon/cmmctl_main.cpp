@@ -149,17 +149,28 @@ void print_record(const json& r) {
 std::string counts_text(const json& c) {
   return std::to_string(c.value("pass", 0)).append(" pass, ") + std::to_string(c.value("fail", 0)).append(" fail, ") +
          std::to_string(c.value("undecided", 0)).append(" undecided, ") +
-         std::to_string(c.value("not_measured", 0)).append(" not measured");
+         std::to_string(c.value("not_measured", 0)).append(" not measured, ") +
+         std::to_string(c.value("excluded", 0)).append(" excluded");
 }
 
-std::string characteristic_text(const json& c) {
+// A characteristic that did not pass: its deviation against the tolerance, or why it has none.
+std::string characteristic_text(const json& c, const json& reason) {
+  if (c.value("verdict", "") == "not_measured")
+    return "not measured" + (reason.is_string() ? ": " + reason.get<std::string>() : std::string());
   const json& t = c.at("tolerance_mm");
   return fmt("%+.4f mm", c.value("deviation_mm", 0.0)) + fmt(" (U %.4f, ", c.value("uncertainty_mm", 0.0)) +
          fmt("tolerance [%+.4f, ", t.at(0).get<double>()) + fmt("%+.4f]) ", t.at(1).get<double>()) +
          c.value("verdict", "");
 }
 
-// The inspection's verdict, its counts, and the features that did not pass (the first 20 of them).
+// Whether a characteristic is listed under the verdict: every one asked for that did not pass.
+bool not_passed(const json& c) {
+  const std::string v = c.value("verdict", "");
+  return v != "pass" && v != "excluded";
+}
+
+// The inspection's verdict with its coverage, its counts, and the features that did not pass,
+// not measured ones included (the first 20 of them).
 void print_verdict(const json& result) {
   const json& inspection = result.value("inspection", json(nullptr));
   if (inspection.is_null()) {
@@ -169,23 +180,27 @@ void print_verdict(const json& result) {
   std::string verdict = inspection.value("verdict", "");
   for (char& c : verdict) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   const json& nominal = inspection.at("nominal");
-  std::printf("verdict     %s against %s (%s)\n", verdict.c_str(), nominal.value("model", "").c_str(),
-              nominal.value("method", "").c_str());
+  // The verdict is only as true as what it covers: the coverage goes on the verdict's own line.
+  std::printf("verdict     %s: %s\n", verdict.c_str(), inspection.value("coverage", "").c_str());
+  std::printf("            against %s (%s)\n", nominal.value("model", "").c_str(), nominal.value("method", "").c_str());
   std::printf("            edge points %s\n", counts_text(inspection.at("counts").at("edge_points")).c_str());
   std::printf("            holes       %s\n", counts_text(inspection.at("counts").at("holes")).c_str());
+  for (const json& note : inspection.value("notes", json::array()))
+    if (note.is_string()) std::printf("            note: %s\n", note.get<std::string>().c_str());
   int shown = 0;
   for (const json& e : result.at("edge_points")) {
     const json& i = e.value("inspection", json(nullptr));
-    if (i.is_null() || i.value("verdict", "") == "pass" || i.value("verdict", "") == "not_measured") continue;
-    if (shown++ < 20) std::printf("  edge %-5d %s\n", e.at("id").get<int>(), characteristic_text(i).c_str());
+    if (i.is_null() || !not_passed(i)) continue;
+    if (shown++ < 20) std::printf("  edge %-5d %s\n", e.at("id").get<int>(), characteristic_text(i, i.value("reason", json())).c_str());
   }
   for (const json& h : result.at("holes")) {
     const json& i = h.value("inspection", json(nullptr));
     if (i.is_null()) continue;
     for (const char* which : {"diameter", "position"}) {
       const json& c = i.at(which);
-      if (c.value("verdict", "") == "pass" || c.value("verdict", "") == "not_measured") continue;
-      if (shown++ < 20) std::printf("  hole %-3d %-8s %s\n", h.at("id").get<int>(), which, characteristic_text(c).c_str());
+      if (!not_passed(c)) continue;
+      if (shown++ < 20)
+        std::printf("  hole %-3d %-8s %s\n", h.at("id").get<int>(), which, characteristic_text(c, i.value("reason", json())).c_str());
     }
   }
   if (shown > 20) std::printf("  ... and %d more not passed (cmmctl result ID --json)\n", shown - 20);
@@ -255,6 +270,40 @@ int watch(RpcClient& client, int id) {
   }
 }
 
+// plan.preview for a person: the model's size in mm first (a model in the wrong unit shows there),
+// then what the plan would measure, its time, and what the dry run ran into; --json gives the reply.
+void print_preview_summary(const std::string& model, const json& p) {
+  const json& mesh = p.at("reference_mesh");
+  std::printf("model      %s: %lld vertices, %lld triangles%s\n", model.c_str(), mesh.value("vertices", 0LL),
+              mesh.value("faces", 0LL), mesh.value("scan", json(nullptr)).is_null() ? "" : " (meshed from a raw scan)");
+  if (const json e = mesh.value("extent_mm", json(nullptr)); e.is_array())
+    std::printf("extent     %.1f × %.1f × %.1f mm\n", e[0].get<double>(), e[1].get<double>(), e[2].get<double>());
+  const json& f = p.at("features");
+  std::printf("points     %lld edge points, %lld with a way to probe them; %lld holes\n", f.value("edge_points", 0LL),
+              f.value("probeable", 0LL), f.value("holes", 0LL));
+  std::printf("touches    %lld with tip %s (r %.3f mm)\n", p.value("touches", 0LL), p.value("tip", "?").c_str(),
+              p.value("probe_radius", 0.0));
+  const json& d = p.at("dry_run");
+  std::printf("estimate   %.0f s (lower bound %.0f s); the dry run took %.0f s\n", p.at("estimate").value("time_s", 0.0),
+              p.at("estimate").value("lower_bound_s", 0.0), d.value("time_s", 0.0));
+  const long long misses = d.value("misses", 0LL), early = d.value("early_triggers", 0LL),
+                  travel = d.value("out_of_travel", 0LL), other = d.value("other_faults", 0LL);
+  if (misses + early + travel + other == 0) std::printf("problems   none in the dry run\n");
+  else
+    std::printf("problems   %lld misses, %lld early triggers, %lld out of travel, %lld other faults\n", misses, early,
+                travel, other);
+  int shown = 0;
+  for (const json& problem : d.value("problems", json::array())) {
+    if (shown++ == 5) {
+      std::printf("           … (cmmctl --json preview lists them all)\n");
+      break;
+    }
+    std::printf("           touch %d %s%s%s\n", problem.value("touch", -1), problem.value("kind", "?").c_str(),
+                problem.contains("message") ? ": " : "", problem.value("message", "").c_str());
+  }
+  for (const json& note : p.value("notes", json::array())) std::printf("note       %s\n", note.get<std::string>().c_str());
+}
+
 // How a raw scan is meshed (docs/api.md, Job request): sent only when given, so cmmd's defaults hold.
 struct ScanFlags {
   double tolerance_mm = 0.05;
@@ -265,7 +314,11 @@ struct ScanFlags {
 json job_request(const std::string& model, const CLI::App& submit, double scale, double delta, double spacing,
                  double angle, const ScanFlags& scan, std::uint64_t seed, const std::string& name,
                  const std::string& corners, const std::string& measure) {
-  json r = {{"model", model}, {"scale", scale}, {"seed", seed}};
+  json r = {{"model", model}, {"seed", seed}};
+  // Sent only when given: an explicit scale is the operator's word on the model's unit, which cmmd's
+  // unit check then does not second-guess; --units-checked says so with the scale left at 1.
+  if (submit.count("--scale")) r["scale"] = scale;
+  if (submit.count("--units-checked")) r["units_checked"] = true;
   if (submit.count("--delta")) r["delta_mm"] = delta;
   if (submit.count("--spacing")) r["spacing_mm"] = spacing;
   if (submit.count("--feature-angle")) r["feature_angle_deg"] = angle;
@@ -373,7 +426,9 @@ int main(int argc, char** argv) {
   double scale = 1, delta = 0.2, spacing = 2, angle = 30;
   ScanFlags scan;
   std::uint64_t seed = 1;
-  bool watch_job = false, reregister = false, requalify = false;
+  bool watch_job = false, reregister = false, requalify = false, allow_unqualified_tip = false;
+  bool units_checked = false;  // sent as "units_checked" (job_request reads the flag's count)
+  std::string job_tip = "auto";
   int id = 0;
 
   auto add_job_options = [&](CLI::App* c) {
@@ -381,7 +436,9 @@ int main(int argc, char** argv) {
                   "mesh (.stl .ply .obj .off) or raw scan (.ply of points, .xyz, .asc, .pcd) to upload, or file:NAME "
                   "from cmmd's models folder")
         ->required();
-    c->add_option("--scale", scale, "model units to mm");
+    c->add_option("--scale", scale, "model units to mm (given, it is taken as checked: no unit check)");
+    c->add_flag("--units-checked", units_checked,
+                "the model's unit is right even if it looks wrong against the plate (a tiny part)");
     c->add_option("--tolerance", scan.tolerance_mm, "raw scan: largest distance of the mesh from the scanned surface, mm")
         ->check(CLI::PositiveNumber);
     c->add_option("--bin-size", scan.bin_size_mm, "raw scan: thinning bin size, mm, instead of the one --tolerance gives")
@@ -399,7 +456,10 @@ int main(int argc, char** argv) {
   CLI::App* submit = app.add_subcommand("submit", "upload a model and queue a job");
   add_job_options(submit);
   submit->add_flag("-w,--watch", watch_job, "follow the job with a progress bar until it ends");
-  submit->add_flag("--requalify", requalify, "qualify the tip again by itself if the machine loses its qualification");
+  submit->add_flag("--requalify", requalify, "qualify a tip by itself when it is not qualified or loses its qualification");
+  submit->add_option("--tip", job_tip, "the tip to measure with, or auto: cmmd chooses per feature among the qualified tips");
+  submit->add_flag("--allow-unqualified-tip", allow_unqualified_tip,
+                   "measure with a tip's nominal radius and offset when it is not qualified (every figure says so)");
   std::string nominal, tolerances_file;
   bool fit_nominal = false;
   double profile_tol = 0, position_tol = 0;
@@ -411,6 +471,12 @@ int main(int argc, char** argv) {
   submit->add_option("--profile-tol", profile_tol, "edge profile tolerance, ± mm")->check(CLI::NonNegativeNumber);
   submit->add_option("--hole-diameter-tol", diameter_tol, "hole diameter tolerance: LOWER UPPER, mm")->expected(2);
   submit->add_option("--hole-position-tol", position_tol, "hole position tolerance (zone diameter), mm")->check(CLI::NonNegativeNumber);
+  std::string inspect_file;
+  bool exclude_not_probeable = false;
+  submit->add_option("--inspect", inspect_file, "JSON file of what to inspect and what to leave out (docs/api.md, Inspect)");
+  submit->add_flag("--exclude-not-probeable", exclude_not_probeable,
+                   "leave out of the verdict, counted as excluded with the plan's reason, the features the plan finds "
+                   "no way to probe in this set-up (e.g. edges standing on the plate)");
   CLI::App* report = app.add_subcommand("report", "a finished job's HTML report");
   report->add_option("ID", id)->required();
   report->add_option("-o,--output", output, "write to this file (default: report-ID.html)");
@@ -485,11 +551,15 @@ int main(int argc, char** argv) {
       CLI::App* c = command == "submit" ? submit : preview;
       const json request = job_request(ref, *c, scale, delta, spacing, angle, scan, seed, name, corners, measure);
       if (command == "preview") {
-        show(client.call("plan.preview", request, 600));
+        const json preview = client.call("plan.preview", request, 600);
+        if (g.raw_json) show(preview);
+        else print_preview_summary(model, preview);
         return 0;
       }
       json submitted = request;
       if (requalify) submitted["requalify"] = true;
+      if (job_tip != "auto") submitted["tip"] = job_tip;
+      if (allow_unqualified_tip) submitted["allow_unqualified_tip"] = true;
       if (!nominal.empty()) {
         std::string nominal_ref = nominal;
         if (nominal.rfind("file:", 0) != 0) nominal_ref = upload_model(client, nominal, 1u << 20, {});
@@ -500,6 +570,9 @@ int main(int argc, char** argv) {
       if (submit->count("--hole-diameter-tol")) tolerances["hole_diameter_mm"] = diameter_tol;
       if (submit->count("--hole-position-tol")) tolerances["hole_position_mm"] = position_tol;
       if (!tolerances.empty()) submitted["tolerances"] = tolerances;
+      json inspect = inspect_file.empty() ? json::object() : read_json_file(inspect_file);
+      if (exclude_not_probeable && inspect.is_object()) inspect["exclude"]["not_probeable"] = true;  // else cmmd says what is wrong
+      if (!inspect.empty()) submitted["inspect"] = inspect;
       const json record = client.call("job.submit", submitted, 120);
       id = record.at("id").get<int>();
       std::printf("job %d queued (%s)\n", id, ref.c_str());
@@ -521,6 +594,13 @@ int main(int argc, char** argv) {
       if (s.contains("position") && s["position"].is_array())
         std::printf("position (%.4f, %.4f, %.4f) tip %s\n", s["position"][0].get<double>(), s["position"][1].get<double>(),
                     s["position"][2].get<double>(), s.value("tip", "").c_str());
+      for (const json& t : s.value("tips", json::array())) {
+        const json q = t.value("qualification", json(nullptr));
+        std::printf("tip      %s%s r %.4f mm, %s\n", t.value("id", "?").c_str(), t.value("active", false) ? " (active)" : "",
+                    t.value("ball_radius_mm", 0.0),
+                    q.is_object() ? ("qualified " + q.value("time_utc", std::string("?"))).c_str()
+                                  : "NOT QUALIFIED (nominal radius and offset)");
+      }
       if (const json jog = s.value("jog", json(nullptr)); jog.is_object())
         std::printf("jog      %d along %s at %g mm/s\n", jog.value("id", 0), position_text(jog.at("direction")).c_str(),
                     jog.value("speed_mm_s", 0.0));

@@ -82,7 +82,7 @@ std::optional<planner::InspectionResult> inspect_job(const JobRequest& request, 
                                        "or ask for \"placement\": \"fit\")");
   }
   const planner::NominalModel nominal = planner::nominal_model(mesh, placement.T_S_N, request.feature_angle_deg);
-  return planner::inspect(result, reference.features.points, nominal, request.tolerances, placement);
+  return planner::inspect(result, reference.features.points, nominal, request.tolerances, placement, request.inspect);
 }
 
 }  // namespace cmm::daemon

@@ -7,6 +7,8 @@
 
 #include "hal/description/eigen_json.hpp"
 #include "daemon/client/rpc_error.hpp"
+#include "daemon/model_units_check.hpp"
+#include "daemon/registration_check.hpp"
 #include "daemon/storage_error.hpp"
 #include "planner/tolerances_json.hpp"
 #include "hal/utc_time.hpp"
@@ -46,6 +48,7 @@ nlohmann::json verdict_of(const JobStore& store, int id) {
     const nlohmann::json& inspection = result.at("inspection");
     if (inspection.is_null()) return nullptr;
     return {{"verdict", inspection.at("verdict")},
+            {"coverage", inspection.value("coverage", "")},  // results from before coverage have none
             {"edge_points", inspection.at("counts").at("edge_points")},
             {"holes", inspection.at("counts").at("holes")}};
   } catch (const std::exception& e) {
@@ -234,6 +237,10 @@ nlohmann::json JobManager::submit(const nlohmann::json& params) {
   const JobRequest request = parse_job_request(params, config_);
   models_.resolve(request.model);  // refuse an unknown model now, not when the job comes up
   if (request.nominal) models_.resolve(request.nominal->model);
+  // Before anything is queued: corners the plate rules out, then a model in the wrong unit or off
+  // the plate they give (the second needs the first: it stands the model on those corners).
+  check_request_registration(request, config_.description);
+  check_request_units(request, models_, config_.description.travel_box);
   std::lock_guard lock(mutex_);
   if (stopping_) throw RpcError(rpc_code::shutting_down, "cmmd is stopping");
   auto job = std::make_unique<Job>();

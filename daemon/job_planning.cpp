@@ -52,10 +52,24 @@ description::MachineDescription machine_for_job(const description::MachineDescri
   return machine;
 }
 
+std::vector<std::string> job_tips(const JobRequest& request, const description::MachineDescription& configured,
+                                  const description::MachineDescription& reported, std::vector<std::string>* left_out) {
+  if (request.tip != "auto") return {request.tip};
+  const std::string primary = configured.find_tip(configured.active_tip) ? configured.active_tip : reported.active_tip;
+  std::vector<std::string> tips{primary};
+  for (const description::StylusTip& t : reported.tips) {
+    if (t.id == primary) continue;
+    if (t.qualification || request.allow_unqualified_tip) tips.push_back(t.id);
+    else if (left_out) left_out->push_back("tip " + t.id + " is not qualified, so the job does not use it");
+  }
+  return tips;
+}
+
 planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
                                   const description::MachineDescription& machine,
-                                  const geometry::CancelCheck& cancel) {
+                                  const geometry::CancelCheck& cancel, std::vector<std::string> tips) {
   planner::MeasurementPlanOptions options;
+  options.tips = std::move(tips);
   options.touch.radius = machine.tip().ball_radius_mm;
   options.touch.delta = model.inputs.delta;
   options.cancel = cancel;

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -36,8 +37,16 @@ description::MachineDescription machine_for_job(const description::MachineDescri
 
 // For the δ the model was loaded with (its inputs), with the active tip's radius. Throws RpcError
 // planning_error when the plan cannot be made; geometry::Cancelled when `cancel` asks.
+// The tips a job that registers now plans with, the primary first: the one the request names; or, for
+// "auto", the configured active tip and every other tip `reported` qualified (any tip, when the
+// request allows unqualified ones). `left_out` gets a line for each tip not used and why.
+std::vector<std::string> job_tips(const JobRequest& request, const description::MachineDescription& configured,
+                                  const description::MachineDescription& reported, std::vector<std::string>* left_out = nullptr);
+
+// `tips`: the tips the plan may use, the primary first (planner::MeasurementPlanOptions::tips); empty:
+// the active tip alone.
 planner::MeasurementPlan plan_job(const ReferenceModel& model, const Eigen::Isometry3d& T_M_S,
                                   const description::MachineDescription& machine,
-                                  const geometry::CancelCheck& cancel = {});
+                                  const geometry::CancelCheck& cancel = {}, std::vector<std::string> tips = {});
 
 }  // namespace cmm::daemon

@@ -17,6 +17,7 @@ constexpr double same_mm = 1e-7;
 
 QualificationInForce in_force(const description::StylusTip& tip, std::string source) {
   QualificationInForce q;
+  q.tip = tip.id;
   q.ball_radius_mm = tip.ball_radius_mm;
   q.offset = tip.offset;
   q.qualification = tip.qualification;
@@ -24,7 +25,14 @@ QualificationInForce in_force(const description::StylusTip& tip, std::string sou
   return q;
 }
 
+std::optional<int> JobQualifications::current(const std::string& tip_id) const {
+  for (std::size_t i = list.size(); i-- > 0;)
+    if (list[i].tip == tip_id) return static_cast<int>(i);
+  return std::nullopt;
+}
+
 bool same_qualification(const QualificationInForce& a, const description::StylusTip& now) {
+  if (a.tip != now.id) return false;
   if (std::abs(a.ball_radius_mm - now.ball_radius_mm) > same_mm) return false;
   if (((a.offset - now.offset).array().abs() > same_mm).any()) return false;
   if (a.qualification.has_value() != now.qualification.has_value()) return false;
@@ -50,13 +58,16 @@ nlohmann::json to_json(const JobQualifications& q) {
                        {"residual_rms_mm", e.qualification->residual_rms_mm},
                        {"touches", e.qualification->touches}};
     list.push_back({{"index", i},
+                    {"tip", e.tip},
                     {"ball_radius_mm", e.ball_radius_mm},
                     {"offset", description::vec3_json(e.offset)},
                     {"qualification", qualification},
                     {"source", e.source},
                     {"since_utc", e.since_utc}});
   }
-  return {{"tip", q.tip}, {"qualifications", list}};
+  nlohmann::json j = {{"tip", q.tip}, {"qualifications", list}};
+  if (q.fitting) j["fitting"] = {{"tip", *q.fitting}, {"since_utc", q.fitting_since_utc}};
+  return j;
 }
 
 JobQualifications job_qualifications_from_json(const nlohmann::json& j) {
@@ -64,6 +75,7 @@ JobQualifications job_qualifications_from_json(const nlohmann::json& j) {
   q.tip = j.at("tip").get<std::string>();
   for (const nlohmann::json& e : j.at("qualifications")) {
     QualificationInForce entry;
+    entry.tip = e.value("tip", q.tip);  // files from before a job could use several tips name only the job's
     entry.ball_radius_mm = e.at("ball_radius_mm").get<double>();
     entry.offset = description::vec3_from_json(e.at("offset"));
     if (const nlohmann::json& k = e.at("qualification"); !k.is_null()) {
@@ -78,6 +90,10 @@ JobQualifications job_qualifications_from_json(const nlohmann::json& j) {
     entry.source = e.at("source").get<std::string>();
     entry.since_utc = e.at("since_utc").get<std::string>();
     q.list.push_back(std::move(entry));
+  }
+  if (const auto f = j.find("fitting"); f != j.end() && !f->is_null()) {
+    q.fitting = f->at("tip").get<std::string>();
+    q.fitting_since_utc = f->at("since_utc").get<std::string>();
   }
   if (q.list.empty()) throw std::invalid_argument("lists no qualification");
   return q;

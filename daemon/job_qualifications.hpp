@@ -15,6 +15,7 @@
 namespace cmm::daemon {
 
 struct QualificationInForce {
+  std::string tip;             // the stylus tip it belongs to
   double ball_radius_mm = 0;   // the tip's radius as the machine reported it
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   std::optional<description::TipQualification> qualification;  // empty: the tip's nominal values, never qualified
@@ -23,14 +24,21 @@ struct QualificationInForce {
 };
 
 struct JobQualifications {
-  std::string tip;
-  std::vector<QualificationInForce> list;  // index = a journal line's "q"
+  std::string tip;  // the job's primary tip: the one it registers with and measures edges with
+  std::vector<QualificationInForce> list;  // index = a journal line's "q"; every tip the job used, in order
+  // A tip the job asked the operator to fit by hand (a machine without a tool changer), and when: the
+  // run after the resume selects it and holds it to a qualification made since.
+  std::optional<std::string> fitting;
+  std::string fitting_since_utc;
+
+  // The entry the touches of `tip_id` are made under now: its last one; nullopt before its first.
+  std::optional<int> current(const std::string& tip_id) const;
 };
 
 // What the machine reports for `tip` now, as an entry with `source`.
 QualificationInForce in_force(const description::StylusTip& tip, std::string source);
 
-// Whether the machine's tip is still the one in force: same radius, offset and qualification time
+// Whether the machine's tip `now` is still the one in force (both of the same tip id) is still the one in force: same radius, offset and qualification time
 // stamp (to 1e-7 mm: the values come through the same wire both times), and qualified on both sides
 // or on neither.
 bool same_qualification(const QualificationInForce& in_force, const description::StylusTip& now);

@@ -11,11 +11,20 @@ const char* to_string(JobRegistration::Method method) {
   return method == JobRegistration::Method::measured ? "measured" : "given";
 }
 
+namespace {
+nlohmann::json tips_json(const std::vector<PlannedTip>& tips) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const PlannedTip& t : tips) j.push_back({{"id", t.id}, {"radius_mm", t.radius_mm}});
+  return j;
+}
+}  // namespace
+
 nlohmann::json to_json(const JobRegistration& r) {
   nlohmann::json j = {{"method", to_string(r.method)},
                       {"T_M_S", description::transform_json(r.T_M_S)},
                       {"radius_mm", r.radius_mm},
                       {"tip", r.tip},
+                      {"tips", tips_json(r.tips)},
                       {"time_utc", r.time_utc},
                       {"registration", r.fit}};
   if (r.method == JobRegistration::Method::measured) {
@@ -39,6 +48,10 @@ JobRegistration job_registration_from_json(const nlohmann::json& j) {
   r.T_M_S = description::transform_from_json(j.at("T_M_S"));
   r.radius_mm = j.at("radius_mm").get<double>();
   r.tip = j.at("tip").get<std::string>();
+  // A job registered before jobs could use several tips plans with its one tip.
+  for (const nlohmann::json& t : j.value("tips", nlohmann::json::array()))
+    r.tips.push_back({t.at("id").get<std::string>(), t.at("radius_mm").get<double>()});
+  if (r.tips.empty()) r.tips.push_back({r.tip, r.radius_mm});
   r.time_utc = j.value("time_utc", "");
   r.fit = j.value("registration", nlohmann::json(nullptr));
   r.corner_touches = j.value("corner_touches", 0);

@@ -21,12 +21,21 @@ struct MeasuredCorner {
   double conditioning = 0;
 };
 
+// A tip the plan may use, at the radius the plan is made for.
+struct PlannedTip {
+  std::string id;
+  double radius_mm = 0;
+};
+
 struct JobRegistration {
   enum class Method { given, measured };
   Method method = Method::given;
   Eigen::Isometry3d T_M_S = Eigen::Isometry3d::Identity();
   double radius_mm = 0;  // the ball radius the plan is made for
-  std::string tip;       // and its tip
+  std::string tip;       // and its tip: the job's primary, which measured the plate
+  // Every tip the plan may use, the primary first (chosen when the job registered: the tips qualified
+  // then), so every resume plans the same touches.
+  std::vector<PlannedTip> tips;
   std::string time_utc;
   nlohmann::json fit;    // planner::to_json(RegistrationResult): the plan's and the result's "registration"
   int corner_touches = 0;                      // measured only

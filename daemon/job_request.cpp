@@ -6,6 +6,7 @@
 
 #include "daemon/client/rpc_error.hpp"
 #include "hal/description/json_fields.hpp"
+#include "planner/inspection_scope_json.hpp"
 #include "planner/tolerances_json.hpp"
 
 namespace cmm::daemon {
@@ -75,7 +76,8 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   };
   if (!f.expect_object()) refuse_if_problems();
   f.known({"model", "name", "scale", "delta_mm", "spacing_mm", "feature_angle_deg", "tolerance_mm", "bin_size_mm",
-           "adaptive", "seed", "requalify", "registration", "nominal", "tolerances"});
+           "adaptive", "seed", "requalify", "units_checked", "tip", "allow_unqualified_tip", "registration", "nominal", "tolerances",
+           "inspect"});
   if (f.require("model", "\"sha256:<hex>\" or \"file:<name>\"")) {
     r.model = f.text("model", "");
     if (params["model"].is_string() && r.model.rfind("sha256:", 0) != 0 && r.model.rfind("file:", 0) != 0)
@@ -85,6 +87,8 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   // A unit conversion (µm, inch, m to mm) lies well inside; the model's size against the travel
   // box is checked when it is loaded, before any work that grows with it.
   r.scale = f.number("scale", 1, 1e-4, 1e4);
+  r.scale_given = f.has("scale");
+  r.units_checked = f.flag("units_checked", false);
   r.delta_mm = f.number("delta_mm", config.job.delta_mm, 0.001, 10);
   r.spacing_mm = f.number("spacing_mm", config.job.spacing_mm, 0.05, 100);
   r.feature_angle_deg = f.number("feature_angle_deg", config.job.feature_angle_deg, 1, 179);
@@ -95,6 +99,12 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   r.adaptive = f.flag("adaptive", false);
   r.seed = static_cast<std::uint64_t>(f.number("seed", 1, 0, 9007199254740992.0));
   r.requalify = f.flag("requalify", false);
+  r.allow_unqualified_tip = f.flag("allow_unqualified_tip", false);
+  {
+    std::set<std::string> tips{"auto"};
+    for (const description::StylusTip& t : config.description.tips) tips.insert(t.id);
+    r.tip = f.text("tip", "auto", tips);
+  }
   if (f.has("nominal")) {
     JsonFields nominal = f.object("nominal");
     if (nominal.value().is_object()) {
@@ -105,6 +115,7 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
           nominal.problem("model", "must be \"sha256:<hex>\" or \"file:<name>\"");
       }
       n.scale = nominal.number("scale", 1, 1e-4, 1e4);
+      n.scale_given = nominal.has("scale");
       n.placement = nominal.text("placement", "given", {"given", "fit"});
       nominal.finish();
       r.nominal = n;
@@ -112,6 +123,8 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   }
   JsonFields tolerances = f.object("tolerances");
   r.tolerances = planner::read_tolerances(tolerances, config.tolerances);
+  JsonFields inspect = f.member("inspect");
+  r.inspect = planner::read_inspection_scope(inspect);
   r.plate = config.plate;
   if (!(registration_optional && !f.has("registration")) &&
       f.require("registration", "{\"corners\": [...]} or {\"measure_plate\": {...}}")) {

@@ -28,12 +28,17 @@ struct NominalRequest {
   std::string model;  // "sha256:…" or "file:…", as `model`
   double scale = 1;
   std::string placement = "given";
+  bool scale_given = false;  // "scale" was in the request: its unit is the operator's word
 };
 
 struct JobRequest {
   std::string model;  // "sha256:<hex>" or "file:<name>"
   std::string name;
   double scale = 1;
+  // The model's unit is the operator's word, not to be second-guessed by the unit check
+  // (planner/model_units.hpp): "units_checked": true, or "scale" given at all (even 1).
+  bool units_checked = false;
+  bool scale_given = false;
   double delta_mm = 0.2;
   double spacing_mm = 2;
   double feature_angle_deg = 30;
@@ -48,9 +53,17 @@ struct JobRequest {
   // When the tip's qualification changed or vanished under the job (a controller restart): true,
   // the job qualifies the tip itself and goes on; false (the default), it pauses for the operator.
   bool requalify = false;
+  // The tip the job measures with: "auto" lets cmmd choose per feature among the machine's qualified
+  // tips (the configured active tip first: it registers the plate and takes every edge it can reach;
+  // a bore goes to the largest ball that fits it); a tip's id measures everything with that tip.
+  std::string tip = "auto";
+  // A touch on a tip that was never qualified (its nominal radius and offset) only when the request
+  // says so; every figure made with one then says so.
+  bool allow_unqualified_tip = false;
   description::Plate plate;
   std::optional<NominalRequest> nominal;  // none: deviations against the scan only, no verdicts
   planner::Tolerances tolerances;         // the config's, overridden field by field by the request's
+  planner::InspectionScope inspect;       // what the verdict covers (default: every feature)
   // Exactly one of these: corner pairs given, or the plate measured on the machine.
   std::optional<planner::RegistrationInput> given;
   std::optional<PlateMeasurement> measure;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <vector>
 
 #include "daemon/client/sha256.hpp"
@@ -42,8 +43,11 @@ nlohmann::json traceability(const JobResultInputs& in, double radius_mm) {
     for (nlohmann::json& q : tip["qualifications"]) {
       q["job_touches"] = 0;
       q["first_touch"] = q["last_touch"] = nullptr;
-      // What touches_at_radius moves its touches by; the first's are the plan's own.
-      q["radius_adjustment_mm"] = q["index"] == 0 ? 0.0 : q["ball_radius_mm"].get<double>() - radius_mm;
+      // What touches_at_radius moves its touches by: from the radius its tip was planned with.
+      double planned = radius_mm;
+      for (const PlannedTip& p : in.registration.tips)
+        if (p.id == q.value("tip", in.qualifications->tip)) planned = p.radius_mm;
+      q["radius_adjustment_mm"] = q["ball_radius_mm"].get<double>() - planned;
     }
     for (const planner::Touch& t : in.plan.program.touches) {  // in the order they were made
       if (!in.touches.contains(t.id)) continue;
@@ -74,18 +78,54 @@ nlohmann::json traceability(const JobResultInputs& in, double radius_mm) {
           {"finished_utc", in.finished_utc}};
 }
 
+// Which tip and which of the job's qualifications made each touch, in the order they were made.
+nlohmann::json touch_tips(const JobResultInputs& in) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const planner::Touch& t : in.plan.program.touches) {
+    const auto made = in.touches.find(t.id);
+    if (made == in.touches.end()) continue;
+    const auto q = in.touch_qualification.find(t.id);
+    list.push_back({{"touch", t.id}, {"tip", made->second.tip_id}, {"q", q == in.touch_qualification.end() ? 0 : q->second}});
+  }
+  return list;
+}
+
+// The tips the job measured with their nominal values (never qualified, as the request allowed):
+// every figure they made rests on a radius and offset nobody measured.
+std::vector<std::string> unqualified_tip_notes(const JobResultInputs& in) {
+  std::vector<std::string> notes;
+  if (!in.qualifications) return notes;
+  std::set<std::string> tips;
+  for (const auto& [touch, q] : in.touch_qualification)
+    if (q >= 0 && static_cast<std::size_t>(q) < in.qualifications->list.size() &&
+        !in.qualifications->list[static_cast<std::size_t>(q)].qualification)
+      tips.insert(in.qualifications->list[static_cast<std::size_t>(q)].tip);
+  for (const std::string& tip : tips)
+    notes.push_back("nominal tip, not qualified: tip " + tip +
+                    " measured with its nominal radius and offset (allow_unqualified_tip); every figure made with it "
+                    "(the features whose \"tip\" is " + tip + ") carries its unknown radius and offset error");
+  return notes;
+}
+
 // Job-wide remarks on the qualifications, for the result's notes.
 std::vector<std::string> qualification_notes(const JobResultInputs& in, double radius_mm) {
-  std::vector<std::string> notes;
-  if (!in.qualifications || in.qualifications->list.size() < 2) return notes;
+  std::vector<std::string> notes = unqualified_tip_notes(in);
+  if (!in.qualifications) return notes;
   const auto& list = in.qualifications->list;
+  std::map<std::string, int> entries;  // by tip
+  for (const QualificationInForce& q : list) ++entries[q.tip];
   char line[512];
-  std::snprintf(line, sizeof line,
-                "tip %s was qualified %zu times during the job (traceability.tip.qualifications): each touch is "
-                "compensated with the radius qualified for it, moved by (r - %.6f mm) along its approach",
-                in.qualifications->tip.c_str(), list.size(), radius_mm);
-  notes.emplace_back(line);
+  for (const auto& [tip, n] : entries) {
+    if (n < 2) continue;
+    std::snprintf(line, sizeof line,
+                  "tip %s was qualified %d times during the job (traceability.tip.qualifications): each touch is "
+                  "compensated with the radius qualified for it, moved by (r - R) along its approach, R the radius "
+                  "the plan was made for (%.6f mm for the job's primary tip)",
+                  tip.c_str(), n, radius_mm);
+    notes.emplace_back(line);
+  }
   for (std::size_t k = 1; k < list.size(); ++k) {
+    if (list[k].tip != list[k - 1].tip) continue;  // another tip's entry: nothing to compare
     const double moved = (list[k].offset - list[k - 1].offset).norm();
     const double dr = list[k].ball_radius_mm - list[k - 1].ball_radius_mm;
     // Two qualifications of one untouched stylus agree to a micrometre or two; more is the stylus moved.
@@ -113,27 +153,35 @@ std::vector<std::string> qualification_notes(const JobResultInputs& in, double r
 std::map<int, planner::TouchOutcome> touches_at_radius(const std::vector<planner::Touch>& planned,
                                                        const std::map<int, hal::TouchResult>& touches,
                                                        const std::map<int, int>& touch_qualification,
-                                                       const JobQualifications* qualifications, double radius_mm) {
-  std::map<int, hal::Vec3> approach;
-  for (const planner::Touch& t : planned) approach[t.id] = t.direction.normalized();
+                                                       const JobQualifications* qualifications,
+                                                       const std::map<std::string, double>& planned_radius) {
+  std::map<int, const planner::Touch*> by_id;
+  for (const planner::Touch& t : planned) by_id[t.id] = &t;
   std::map<int, planner::TouchOutcome> outcomes;
   for (const auto& [id, r] : touches) {
     planner::TouchOutcome o{r.contact, r.centre};
     const auto q = touch_qualification.find(id);
-    if (qualifications && q != touch_qualification.end() && q->second > 0 &&
-        static_cast<std::size_t>(q->second) < qualifications->list.size() && approach.contains(id) && r.contact)
-      o.centre += (qualifications->list[static_cast<std::size_t>(q->second)].ball_radius_mm - radius_mm) * approach[id];
+    const auto touch = by_id.find(id);
+    if (qualifications && q != touch_qualification.end() && static_cast<std::size_t>(q->second) < qualifications->list.size() &&
+        touch != by_id.end() && r.contact) {
+      const QualificationInForce& made = qualifications->list[static_cast<std::size_t>(q->second)];
+      if (const auto radius = planned_radius.find(made.tip); radius != planned_radius.end())
+        o.centre += (made.ball_radius_mm - radius->second) * touch->second->direction.normalized();
+    }
     outcomes[id] = o;
   }
   return outcomes;
 }
 
 std::string write_job_result(JobStore& store, int job_id, const JobResultInputs& in) {
-  const double radius = in.machine.tip().ball_radius_mm;
+  const double radius = in.registration.radius_mm;
+  std::map<std::string, double> planned_radius;
+  for (const PlannedTip& t : in.registration.tips) planned_radius[t.id] = t.radius_mm;
   const std::map<int, planner::TouchOutcome> outcomes =
-      touches_at_radius(in.plan.program.touches, in.touches, in.touch_qualification, in.qualifications, radius);
+      touches_at_radius(in.plan.program.touches, in.touches, in.touch_qualification, in.qualifications, planned_radius);
   planner::MeasurementResult result = planner::compensate_plan(
       in.model.features, in.plan, in.registration.T_M_S, outcomes, {radius, in.config.job.trigger_sigma_mm});
+  for (std::string& note : qualification_notes(in, radius)) result.notes.push_back(std::move(note));
   // A nominal that cannot be read or placed costs the verdicts, never the measurements: the result is
   // written without them and says why.
   std::string inspection_problem;
@@ -147,9 +195,9 @@ std::string write_job_result(JobStore& store, int job_id, const JobResultInputs&
   }
 
   nlohmann::json j = planner::to_json(result);
-  for (std::string& note : qualification_notes(in, radius)) j["notes"].push_back(std::move(note));
   j["job"] = job_id;
   j["touches"] = in.touches.size();
+  j["touch_tips"] = touch_tips(in);
   j["machine_time_s"] = in.machine_time_s;
   j["probing_time_s"] = in.probing_time_s;
   j["estimate_s"] = in.plan.program.time_s;
@@ -183,10 +231,10 @@ std::string write_job_result(JobStore& store, int job_id, const JobResultInputs&
   std::string summary = line;
   if (result.inspection) {
     const planner::InspectionResult& r = *result.inspection;
-    std::snprintf(line, sizeof line, "; verdict %s (%d pass, %d fail, %d undecided)", planner::to_string(r.verdict),
+    std::snprintf(line, sizeof line, "; verdict %s (%d pass, %d fail, %d undecided; ", planner::to_string(r.verdict),
                   r.edge_counts.pass + r.hole_counts.pass, r.edge_counts.fail + r.hole_counts.fail,
                   r.edge_counts.undecided + r.hole_counts.undecided);
-    summary += line;
+    summary.append(line).append(planner::coverage_text(r)).append(")");
   } else if (!inspection_problem.empty()) {
     summary.append("; no verdicts: ").append(inspection_problem);
   }

@@ -45,13 +45,15 @@ struct JobResultInputs {
   const ModelStore* models = nullptr;
 };
 
-// The touch results as compensation takes them, all for the plan's radius R: a touch made under a
-// later qualification (touch_qualification > 0) of radius r is moved by (r − R) along its planned
-// approach, which keeps its contact point (docs/result.md, Traceability). By plan touch id.
+// The touch results as compensation takes them, each for the radius R its tip was planned with
+// (`planned_radius`, by tip id; a touch of a tip not in it keeps its centre): a touch made under a
+// qualification of radius r is moved by (r − R) along its planned approach, which keeps its contact
+// point (docs/result.md, Traceability). By plan touch id.
 std::map<int, planner::TouchOutcome> touches_at_radius(const std::vector<planner::Touch>& planned,
                                                        const std::map<int, hal::TouchResult>& touches,
                                                        const std::map<int, int>& touch_qualification,
-                                                       const JobQualifications* qualifications, double radius_mm);
+                                                       const JobQualifications* qualifications,
+                                                       const std::map<std::string, double>& planned_radius);
 
 // Writes the files into the job's folder (each atomically) and returns a one-line summary for the
 // job record's reason ("212 edge points measured, 0 failed; deviation RMS 0.012 mm, max 0.031 mm").

@@ -13,6 +13,7 @@
 #include "hal/fault.hpp"
 #include "hal/utc_time.hpp"
 #include "planner/corner_probing.hpp"
+#include "planner/number_text.hpp"
 #include "planner/plan_json.hpp"
 #include "planner/plate_pose.hpp"
 #include "planner/registration.hpp"
@@ -21,9 +22,9 @@ namespace cmm::daemon {
 
 namespace {
 
-description::StylusTip active_tip(const description::MachineDescription& info) {
-  if (const description::StylusTip* tip = info.find_tip(info.active_tip)) return *tip;
-  throw RpcError(rpc_code::planning_error, "the machine reports no active tip (\"" + info.active_tip + "\")");
+description::StylusTip tip_of(const description::MachineDescription& info, const std::string& id) {
+  if (const description::StylusTip* tip = info.find_tip(id)) return *tip;
+  throw RpcError(rpc_code::planning_error, "the machine has no tip \"" + id + "\"");
 }
 
 }  // namespace
@@ -34,7 +35,8 @@ JobRunner::JobRunner(RunEnvironment env, int job_id, JobRequest request, JobCont
       request_(std::move(request)),
       control_(control),
       sink_(std::move(sink)),
-      tip_(env_.machine, env_.store, job_id, request_.requalify, [this] { check_stop(); }) {}
+      tip_(env_.machine, env_.store, job_id, TipRules{request_.requalify, request_.allow_unqualified_tip},
+           [this] { check_stop(); }) {}
 
 void JobRunner::run(bool rehome, bool reregister) {
   const std::string started = hal::utc_now();
@@ -49,10 +51,11 @@ void JobRunner::run(bool rehome, bool reregister) {
     if (probed) env_.machine.bring_up();
     else prepare_machine(rehome);
     const double clock0_s = env_.machine.cmm().status().t_s;
-    const description::MachineDescription info = check_tip(reregister, probed);
-    const description::StylusTip tip = active_tip(info);
-    const JobRegistration registration = register_part(reregister, tip);
-    const description::MachineDescription machine = machine_for_plan(info, registration, probed);
+    const std::optional<JobRegistration> kept = reregister ? std::nullopt : kept_registration();
+    const std::vector<std::string> tips = kept ? planned_tip_ids(*kept) : tips_for_registration(env_.machine.cmm().info());
+    const description::MachineDescription info = check_tip(reregister, probed, kept.has_value(), tips);
+    const JobRegistration registration = register_part(reregister, tips, info);
+    const description::MachineDescription machine = machine_for_plan(info, registration);
     check_control();
     const planner::MeasurementPlan plan = this->plan(model, registration, machine);
     const Touches touches = probe(plan, machine, probed);
@@ -65,7 +68,7 @@ void JobRunner::run(bool rehome, bool reregister) {
                                  .touches = touches.results,
                                  .qualifications = tip_.qualifications(),
                                  .touch_qualification = touches.qualification_of,
-                                 .tip = tip,
+                                 .tip = tip_of(machine, registration.tip),
                                  .machine_time_s = env_.machine.cmm().status().t_s - clock0_s,
                                  .probing_time_s = touches.probing_time_s,
                                  .version = env_.version,
@@ -174,15 +177,62 @@ double JobRunner::clearance_z() const {
 
 // --- tip
 
-description::MachineDescription JobRunner::check_tip(bool reregister, bool probed) {
+std::vector<std::string> JobRunner::planned_tip_ids(const JobRegistration& registration) {
+  std::vector<std::string> ids;
+  for (const PlannedTip& t : registration.tips) ids.push_back(t.id);
+  return ids;
+}
+
+// The tips a new registration plans with (daemon::job_tips). A tip left out is said in the log; the
+// features only it could reach stay unmeasured, and the verdict says so.
+std::vector<std::string> JobRunner::tips_for_registration(const description::MachineDescription& info) const {
+  std::vector<std::string> left_out;
+  std::vector<std::string> tips = job_tips(request_, env_.config.description, info, &left_out);
+  for (const std::string& line : left_out) spdlog::info("job {}: {}", id_, line);
+  return tips;
+}
+
+// Before a registration, the primary tip is made active and checked; after one, the active tip is
+// checked when it is one of the job's (the probing changes to the others as the program asks).
+description::MachineDescription JobRunner::check_tip(bool reregister, bool probed, bool registered,
+                                                     const std::vector<std::string>& tips) {
   description::MachineDescription info = env_.machine.cmm().info();
   if (probed) {
     tip_.load();
     return info;
   }
-  const std::optional<JobRegistration> kept = reregister ? std::nullopt : kept_registration();
-  return tip_.check(std::move(info), reregister, kept ? std::optional<std::string>(kept->tip) : std::nullopt,
-                    clearance_z());
+  if (!registered) return use_tip(tips.front(), reregister);
+  if (std::find(tips.begin(), tips.end(), info.active_tip) == tips.end()) {
+    tip_.load();
+    return info;
+  }
+  return tip_.check(std::move(info), false, clearance_z());
+}
+
+// Makes `id` the active tip (up to the clearance plane first) and checks it. A machine without a tool
+// changer holds the job for the operator to fit it; the run after the resume selects it.
+description::MachineDescription JobRunner::use_tip(const std::string& id, bool reregister) {
+  hal::Cmm& cmm = env_.machine.cmm();
+  description::MachineDescription info = cmm.info();
+  if (info.active_tip != id) {
+    tip_of(info, id);
+    check_stop();
+    rise_to_clearance(cmm, planner::tip_change_z(info, id, clearance_z()), {});
+    if (!info.tool_changer && tip_.fitting() != id) {
+      tip_.ask_fitting(id);
+      throw JobHold(JobState::paused,
+                    "fit tip " + id + " on the probe (this machine has no tool changer), then job.resume; the tip is "
+                    "qualified again before its first touch",
+                    JobFault{"TipChange", "the job's next touches are made with tip " + id + "; tip " + info.active_tip +
+                                              " is fitted"});
+    }
+    check_stop();
+    cmm.select_tip(id);
+    TouchJournal(env_.store.path(id_, JobFile::touches)).append(TipChangeEntry{id, hal::utc_now()});
+    spdlog::info("job {}: tip {} {}", id_, id, info.tool_changer ? "selected" : "fitted by hand");
+    info = cmm.info();
+  }
+  return tip_.check(std::move(info), reregister, clearance_z());
 }
 
 // --- registration
@@ -193,9 +243,11 @@ std::optional<JobRegistration> JobRunner::kept_registration() const {
   return job_registration_from_json(nlohmann::json::parse(*text));
 }
 
-JobRegistration JobRunner::register_part(bool reregister, const description::StylusTip& tip) {
+JobRegistration JobRunner::register_part(bool reregister, const std::vector<std::string>& tips,
+                                         const description::MachineDescription& info) {
   if (!reregister)
     if (std::optional<JobRegistration> kept = kept_registration()) return *kept;
+  const description::StylusTip tip = tip_of(info, tips.front());
   sink_.state(JobState::registering, "", std::nullopt);
   if (reregister) {
     // A new T_M_S makes a new plan whose touch ids need not match the journal's: the old touches are
@@ -219,6 +271,7 @@ JobRegistration JobRunner::register_part(bool reregister, const description::Sty
   }
   registration.radius_mm = tip.ball_radius_mm;
   registration.tip = tip.id;
+  for (const std::string& id : tips) registration.tips.push_back({id, tip_of(info, id).ball_radius_mm});
   registration.time_utc = hal::utc_now();
   env_.store.write(id_, JobFile::registration, to_json(registration).dump(1) + "\n");
   return registration;
@@ -232,6 +285,27 @@ JobRegistration JobRunner::measure_plate(double radius_mm) {
   options.ball_radius_mm = radius_mm;
   const std::vector<planner::Touch> touches =
       planner::plan_corner_touches(plate, planner::fit_plate_pose(plate, m.ids, m.rough_machine), options);
+  // A touch that finds nothing (or meets the plate early) names its corner, and the rough corner the
+  // plate's shape agrees with least: one corner taught off tilts the fitted pose, so another
+  // corner's touch may be the first to miss.
+  const auto plate_touch_failed = [&](std::size_t i, const std::string& what) {
+    const planner::Touch& t = touches[i];
+    std::vector<Eigen::Vector3d> nominal;
+    for (int id : m.ids) nominal.push_back(plate.corner(id));
+    const planner::RigidFit rough = planner::fit_rigid(nominal, m.rough_machine);
+    const auto worst = static_cast<std::size_t>(
+        std::max_element(rough.residual_norms.begin(), rough.residual_norms.end()) - rough.residual_norms.begin());
+    const std::string whose = t.target == planner::TouchTarget::plate_face ? "corner " + std::to_string(t.corner)
+                              : t.corner > 0 ? "the fiducial at corner " + std::to_string(t.corner)
+                                             : std::string("the fiducial");
+    return "plate touch " + std::to_string(i + 1) + " of " + std::to_string(touches.size()) + " (" + whose + ", face " +
+           std::to_string(t.face) + ") " + what + ": " +
+           (i == 0 ? "the very first plate touch, so the rough machine positions (rough_machine) or the plate "
+                     "description may be wrong"
+                   : whose + " is not where rough_machine puts the plate") +
+           "; of the rough corners, corner " + std::to_string(m.ids[worst]) + " agrees least with the plate's shape (" +
+           planner::fixed(rough.residual_norms[worst], 1) + " mm off the others' fit): teach it again";
+  };
   std::vector<Eigen::Vector3d> centres;
   hal::Vec3 at = env_.machine.cmm().status().position;
   for (std::size_t i = 0; i < touches.size(); ++i) {
@@ -241,14 +315,24 @@ JobRegistration JobRunner::measure_plate(double radius_mm) {
                                       "job.resume measures the plate again");
     sink_.progress({"registering", static_cast<int>(i), static_cast<int>(touches.size()), 0});
     // The same touch sequence as the job's, with the machine's clearance plane.
-    const hal::TouchResult r = touch(touches[i], planner::touch_motions(touches[i], at, d.clearance_z, d));
+    hal::TouchResult r;
+    try {
+      r = touch(touches[i], planner::touch_motions(touches[i], at, d.clearance_z, d));
+    } catch (const hal::Fault& f) {
+      // Met the plate before the touch (EarlyTrigger), or a search or target off the travel: the
+      // machine's fault, its kind kept, said in the registration's terms.
+      if (f.kind() != hal::FaultKind::early_trigger && f.kind() != hal::FaultKind::no_contact &&
+          f.kind() != hal::FaultKind::soft_limit)
+        throw;
+      throw hal::Fault(f.kind(), plate_touch_failed(i, std::string("failed (") + hal::to_string(f.kind()) + ": " + f.what() + ")"));
+    }
     at = touches[i].start;
-    if (!r.contact)
-      throw RpcError(rpc_code::registration_error,
-                     "plate touch " + std::to_string(touches[i].id) + " (" + planner::to_string(touches[i].target) +
-                         (touches[i].corner > 0 ? ", corner " + std::to_string(touches[i].corner) : std::string()) +
-                         ") found nothing: the plate is not where rough_machine puts it",
-                     {{"kind", "probing"}});
+    if (!r.contact) {
+      const planner::Touch& t = touches[i];
+      throw RpcError(rpc_code::registration_error, plate_touch_failed(i, "found nothing"),
+                     {{"kind", "probing"}, {"corners", t.target == planner::TouchTarget::plate_face
+                                                           ? nlohmann::json::array({t.corner}) : nlohmann::json::array()}});
+    }
     centres.push_back(r.centre);
   }
   sink_.progress({"registering", static_cast<int>(touches.size()), static_cast<int>(touches.size()), 0});
@@ -278,27 +362,22 @@ JobRegistration JobRunner::measure_plate(double radius_mm) {
 
 // --- plan
 
-// The configured description with the machine's tips, the registered tip active at the radius the
-// plan was first made for: the same plan, touch ids and all, on every resume.
+// The configured description with the machine's tips, each of the job's at the radius the plan was
+// first made for and the primary active: the same plan, touch ids and all, on every resume.
 description::MachineDescription JobRunner::machine_for_plan(const description::MachineDescription& info,
-                                                            const JobRegistration& registration, bool probed) const {
+                                                            const JobRegistration& registration) const {
   description::MachineDescription machine = machine_for_job(env_.config.description, info);
   for (description::StylusTip& t : machine.tips)
-    if (t.id == registration.tip) {
-      t.ball_radius_mm = registration.radius_mm;
-      machine.active_tip = t.id;
-    }
-  if (!probed && machine.active_tip != info.active_tip)
-    throw JobHold(JobState::paused, "job " + std::to_string(id_) + " was registered with tip " + machine.active_tip +
-                                        " but the machine's active tip is " + info.active_tip +
-                                        ": select it again, or resume with reregister");
+    for (const PlannedTip& p : registration.tips)
+      if (t.id == p.id) t.ball_radius_mm = p.radius_mm;
+  machine.active_tip = registration.tip;
   return machine;
 }
 
 planner::MeasurementPlan JobRunner::plan(const ReferenceModel& model, const JobRegistration& registration,
                                          const description::MachineDescription& machine) {
   const geometry::CancelCheck cancel{[this] { return control_.cancel || control_.shutdown; }};
-  planner::MeasurementPlan plan = plan_job(model, registration.T_M_S, machine, cancel);
+  planner::MeasurementPlan plan = plan_job(model, registration.T_M_S, machine, cancel, planned_tip_ids(registration));
   if (!env_.store.read(id_, JobFile::plan)) {
     nlohmann::json file = planner::plan_json(model.features, model.inputs, &plan, &machine, registration.fit);
     file["model"]["reference_mesh"] = reference_mesh_;
@@ -394,12 +473,16 @@ JobRunner::Touches JobRunner::probe(const planner::MeasurementPlan& plan, const 
   hal::Cmm& cmm = env_.machine.cmm();
   const double clock0_s = cmm.status().t_s;
   hal::Vec3 at = cmm.status().position;
+  std::string active = cmm.info().active_tip;
   for (const planner::Touch& t : program.touches) {
     if (touches.results.contains(t.id)) continue;
     check_control();
-    if (tip_.reconnected()) {
-      tip_.check(cmm.info(), false, machine.active_tip, program.clearance_z);
-      at = cmm.status().position;  // a requalification leaves the ball at the reference sphere
+    // A tip change the program asks for, or a reconnect (the controller may have restarted with
+    // another tip, or forgotten a qualification): the tip is made active and checked.
+    const std::string& tip = t.tip.empty() ? machine.active_tip : t.tip;
+    if (tip != active || tip_.reconnected()) {
+      active = use_tip(tip, false).active_tip;
+      at = cmm.status().position;  // a change or a requalification moved the ball
     }
     const int q = tip_.current();
     const auto keep = [&](const hal::TouchResult& r) {

@@ -68,10 +68,15 @@ class JobRunner {
   // The stages, in the order run() takes them; each throws to end the run.
   ReferenceModel load_model();
   void prepare_machine(bool rehome);  // up, reset, a touch a stop cut short left, homed
-  description::MachineDescription check_tip(bool reregister, bool probed);
-  JobRegistration register_part(bool reregister, const description::StylusTip& tip);
+  std::vector<std::string> tips_for_registration(const description::MachineDescription& info) const;
+  static std::vector<std::string> planned_tip_ids(const JobRegistration& registration);
+  description::MachineDescription check_tip(bool reregister, bool probed, bool registered,
+                                            const std::vector<std::string>& tips);
+  description::MachineDescription use_tip(const std::string& id, bool reregister);
+  JobRegistration register_part(bool reregister, const std::vector<std::string>& tips,
+                                const description::MachineDescription& info);
   description::MachineDescription machine_for_plan(const description::MachineDescription& info,
-                                                   const JobRegistration& registration, bool probed) const;
+                                                   const JobRegistration& registration) const;
   planner::MeasurementPlan plan(const ReferenceModel& model, const JobRegistration& registration,
                                 const description::MachineDescription& machine);
   Touches probe(const planner::MeasurementPlan& plan, const description::MachineDescription& machine, bool probed);

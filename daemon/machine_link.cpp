@@ -119,6 +119,29 @@ nlohmann::json MachineLink::status_json() {
   return j;
 }
 
+nlohmann::json MachineLink::tips_json() {
+  nlohmann::json tips = nlohmann::json::array();
+  try {
+    const description::MachineDescription info = cmm_->info();
+    for (const description::StylusTip& t : info.tips) {
+      nlohmann::json q = nullptr;
+      if (t.qualification)
+        q = {{"time_utc", t.qualification->time_utc},
+             {"ball_radius_mm", t.qualification->ball_radius_mm},
+             {"residual_rms_mm", t.qualification->residual_rms_mm}};
+      tips.push_back({{"id", t.id},
+                      {"active", t.id == info.active_tip},
+                      {"ball_radius_mm", t.ball_radius_mm},
+                      {"offset", description::vec3_json(t.offset)},
+                      {"qualified", t.qualification.has_value()},
+                      {"qualification", q}});
+    }
+  } catch (const std::exception&) {
+    // Not connected: the machine cannot say; status_json's fault says why.
+  }
+  return tips;
+}
+
 MachineLink::Lease::~Lease() {
   if (link_ == nullptr) return;
   {

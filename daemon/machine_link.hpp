@@ -48,6 +48,9 @@ class MachineLink {
   // The tip as the machine reported it right after cmmd last qualified it (since cmmd started).
   std::optional<description::StylusTip> qualified_by_cmmd(const std::string& tip_id) const;
   // status() that never throws: a link that is down reads as {"link": "down", "fault": …}.
+  // Each tip as the machine reports it: id, active, radius, offset, and its qualification (null: never
+  // qualified, or forgotten by a controller that restarted). Empty when the link is down.
+  nlohmann::json tips_json();
   nlohmann::json status_json();
   hal::Cmm& cmm() { return *cmm_; }  // motion for the lease holder; status, stop, abort for anyone
   const std::string& driver() const { return driver_; }

@@ -11,6 +11,8 @@ namespace cmm::daemon {
 namespace {
 
 const std::set<std::string> kFinalStates = {"done", "failed", "cancelled", "interrupted"};
+// A done job's verdicts (docs/result.md): a fixed label set, so that a record cannot grow it.
+const std::set<std::string> kVerdicts = {"pass", "fail", "undecided", "incomplete"};
 
 // A label value with \, " and newline escaped, as the format asks.
 std::string escaped(const std::string& value) {
@@ -66,6 +68,10 @@ void Metrics::observe(const std::string& method, const nlohmann::json& params, C
     else last_touch_.try_emplace(job, now);
     if (!kFinalStates.contains(state)) return;
     ++jobs_by_state_[state];
+    if (const nlohmann::json* v = params.contains("verdict") ? &params["verdict"] : nullptr; v && v->is_object()) {
+      const std::string verdict = v->value("verdict", "");
+      ++verdicts_[kVerdicts.contains(verdict) ? verdict : "other"];
+    }
     job_seconds_.observe(seconds_between(job_started_[job], now));
     job_started_.erase(job);
     last_touch_.erase(job);
@@ -100,6 +106,12 @@ std::string Metrics::text(const MetricsGauges& gauges, const std::optional<MqttG
   for (const std::string& state : kFinalStates) jobs[state] = 0;
   for (const auto& [state, n] : jobs_by_state_) jobs[state] = n;
   labelled(out, "cmmd_jobs_total", "state", jobs);
+  family(out, "cmmd_job_verdicts_total", "counter",
+         "Done jobs with a nominal, by verdict (incomplete: a feature asked for was not measured).");
+  std::map<std::string, long long> verdicts;
+  for (const std::string& verdict : kVerdicts) verdicts[verdict] = 0;
+  for (const auto& [verdict, n] : verdicts_) verdicts[verdict] = n;
+  labelled(out, "cmmd_job_verdicts_total", "verdict", verdicts);
   family(out, "cmmd_job_duration_seconds", "histogram", "From a job's start to its final state, pauses included.");
   histogram(out, "cmmd_job_duration_seconds", job_seconds_);
   family(out, "cmmd_touch_duration_seconds", "histogram",

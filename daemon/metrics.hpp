@@ -1,5 +1,5 @@
 // What cmmd counts for monitoring, and its Prometheus text exposition (format 0.0.4) that /metrics
-// serves (docs/fleet.md): touches, jobs by final state, job and touch durations, machine faults,
+// serves (docs/fleet.md): touches, jobs by final state and by verdict, job and touch durations, machine faults,
 // the link, JSON-RPC requests and errors by method, connected clients.
 #pragma once
 
@@ -58,6 +58,7 @@ class Metrics {
   const std::set<std::string> methods_;
   long long touches_ = 0;
   std::map<std::string, long long> jobs_by_state_;
+  std::map<std::string, long long> verdicts_;  // done jobs by verdict
   std::map<std::string, long long> faults_by_kind_;
   std::map<std::string, long long> requests_, errors_;
   int link_up_ = 0;

@@ -9,6 +9,8 @@
 
 #include "daemon/job_planning.hpp"
 #include "daemon/job_reference.hpp"
+#include "daemon/model_units_check.hpp"
+#include "daemon/registration_check.hpp"
 #include "daemon/client/rpc_error.hpp"
 #include "daemon/driver_factory.hpp"
 #include "daemon/touch_motion.hpp"
@@ -104,13 +106,20 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
                             const description::MachineDescription* info, const geometry::CancelCheck& cancel) {
   const JobRequest request = parse_job_request(params, config, true);
   const std::filesystem::path model_file = models.resolve(request.model);
+  // What job.submit would refuse, refused before the work: the registration, then the model's unit.
+  check_request_registration(request, info ? machine_for_job(config.description, *info) : config.description);
+  std::vector<std::string> notes = check_request_units(request, models, config.description.travel_box);
   const ReferenceModel model = load_reference_model(model_file, request, config.description.travel_box, cancel);
-  std::vector<std::string> notes;
   const Eigen::Isometry3d T_M_S = preview_registration(request, notes);
   const description::MachineDescription machine =
       info ? machine_for_job(config.description, *info) : config.description;
   if (!info) notes.push_back("the machine could not be read: planned for the configured tip radii");
-  const planner::MeasurementPlan plan = plan_job(model, T_M_S, machine, cancel);
+  // The tips the job would plan with now; the dry run changes tips where the program does.
+  std::vector<std::string> tips = job_tips(request, config.description, machine, &notes);
+  if (!machine.find_tip(tips.front())) tips = {machine.active_tip};
+  description::MachineDescription primary = machine;
+  primary.active_tip = tips.front();
+  const planner::MeasurementPlan plan = plan_job(model, T_M_S, primary, cancel, tips);
 
   const std::unique_ptr<hal::Cmm> simulator = make_simulator(".");
   hal::Cmm& cmm = *simulator;
@@ -125,11 +134,18 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
   int contacts = 0, misses = 0, early = 0, out_of_travel = 0, other = 0;
   nlohmann::json problems = nlohmann::json::array();
   hal::Vec3 at = cmm.status().position;
+  description::MachineDescription now = primary;  // its active tip follows the program's changes
+  if (cmm.info().active_tip != now.active_tip) cmm.select_tip(now.active_tip);
   for (const planner::Touch& t : plan.program.touches) {
     cancel.throw_if_requested("the dry run");
     try {
+      if (!t.tip.empty() && t.tip != now.active_tip) {
+        run_motions(cmm, planner::tip_change_motions(at, t.tip, plan.program.clearance_z, now));
+        now.active_tip = t.tip;
+        at = cmm.status().position;
+      }
       const std::vector<planner::Motion> motions =
-          motions_from(at, planner::motions_of(plan.program, t.id), t, plan.program.clearance_z, machine);
+          motions_from(at, planner::motions_of(plan.program, t.id), t, plan.program.clearance_z, now);
       at = t.start;
       const hal::TouchResult r = run_motions(cmm, motions);
       (r.contact ? contacts : misses)++;
@@ -157,6 +173,8 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
   return {{"reference_mesh",
            {{"vertices", model.mesh.vertices.rows()},
             {"faces", model.mesh.faces.rows()},
+            {"extent_mm", description::vec3_json(Eigen::Vector3d(model.mesh.vertices.colwise().maxCoeff() -
+                                                                 model.mesh.vertices.colwise().minCoeff()))},
             {"scan", model.scan ? scan_report_json(*model.scan) : nlohmann::json(nullptr)}}},
           {"features",
            {{"edge_points", model.features.points.size()},
@@ -164,8 +182,9 @@ nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& co
             {"convex", probeable},
             {"holes", model.features.holes.size()}}},
           {"touches", plan.program.touches.size()},
-          {"tip", machine.active_tip},
-          {"probe_radius", machine.tip().ball_radius_mm},
+          {"tip", primary.active_tip},
+          {"tips", tips},
+          {"probe_radius", primary.tip().ball_radius_mm},
           {"estimate", {{"time_s", plan.program.time_s}, {"lower_bound_s", plan.program.lower_bound_s}}},
           {"dry_run",
            {{"time_s", cmm.status().t_s - homed_at_s},

@@ -71,6 +71,7 @@ nlohmann::json with_machine(Service& s, const std::string& what, F&& f) {
 void add_machine_methods(RpcDispatcher& d, Service& s, const std::shared_ptr<MachineJog>& jog) {
   d.add("machine.status", {Role::observer, Work::blocking, [&s, jog](const nlohmann::json&, RpcContext&) {
           nlohmann::json j = s.machine.status_json();
+          j["tips"] = s.machine.tips_json();
           if (const auto running = s.jobs.running_job()) j["job"] = *running;
           j["jog"] = jog->status_json();
           j["last_jog"] = jog->last_json();

@@ -43,6 +43,8 @@ std::string to_json_line(const JournalEntry& e) {
   return j.dump();
 }
 
+std::string to_json_line(const TipChangeEntry& c) { return nlohmann::json{{"change_tip", c.tip}, {"utc", c.utc}}.dump(); }
+
 Recovery recover_journal(const std::filesystem::path& file) {
   Recovery out;
   std::ifstream in(file, std::ios::binary);
@@ -59,7 +61,11 @@ Recovery recover_journal(const std::filesystem::path& file) {
     const bool last = !complete || end + 1 >= text.size();
     try {
       if (!complete) throw std::runtime_error("no newline");
-      out.entries.push_back(from_json(nlohmann::json::parse(line)));
+      const nlohmann::json j = nlohmann::json::parse(line);
+      if (j.contains("change_tip"))
+        out.tip_changes.push_back({j.at("change_tip").get<std::string>(), j.value("utc", "")});
+      else
+        out.entries.push_back(from_json(j));
       out.kept_bytes = end + 1;
     } catch (const std::exception& e) {
       if (!last) throw geometry::FileError::at_line(file, line_number, std::string("not a journal line: ") + e.what());
@@ -90,8 +96,11 @@ TouchJournal::~TouchJournal() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void TouchJournal::append(const JournalEntry& entry) {
-  const std::string line = to_json_line(entry) + "\n";
+void TouchJournal::append(const JournalEntry& entry) { append_line(to_json_line(entry) + "\n"); }
+
+void TouchJournal::append(const TipChangeEntry& change) { append_line(to_json_line(change) + "\n"); }
+
+void TouchJournal::append_line(const std::string& line) {
   const off_t end = ::lseek(fd_, 0, SEEK_END);
   if (end < 0) fail(file_, "append");
   // A line half written (the disk filled up under it) or not known to be on disk is taken back.

@@ -22,8 +22,16 @@ struct JournalEntry {
 
 std::string to_json_line(const JournalEntry& entry);  // one line, no newline
 
+// A tip change the job made (a line of its own between the touches): which tip, and when.
+struct TipChangeEntry {
+  std::string tip;
+  std::string utc;
+};
+std::string to_json_line(const TipChangeEntry& change);
+
 struct Recovery {
-  std::vector<JournalEntry> entries;  // every complete line, in order
+  std::vector<JournalEntry> entries;  // every complete touch line, in order
+  std::vector<TipChangeEntry> tip_changes;
   bool torn_tail = false;             // the last line was cut short by a crash, and was dropped
   std::uintmax_t kept_bytes = 0;      // the length of the complete lines: where a torn tail begins
 };
@@ -46,9 +54,12 @@ class TouchJournal {
   // or the sync fails (a full disk: geometry::FileError with its errno) the file is cut back to
   // where it ended before, so it holds no half line and the touch is not in it.
   void append(const JournalEntry& entry);
+  void append(const TipChangeEntry& change);  // the same way
   const std::filesystem::path& file() const { return file_; }
 
  private:
+  void append_line(const std::string& line);
+
   std::filesystem::path file_;
   int fd_ = -1;
 };

@@ -8,6 +8,10 @@ constexpr double same_place_mm = 1e-3;
 }
 
 hal::TouchResult run_motion(hal::Cmm& cmm, const planner::Motion& m) {
+  if (m.kind == planner::MotionKind::change_tip) {
+    cmm.select_tip(m.tip);
+    return {};
+  }
   if (m.kind != planner::MotionKind::probe) {
     cmm.move({m.to, m.speed_mm_s});
     return {};

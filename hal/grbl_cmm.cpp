@@ -411,6 +411,7 @@ description::MachineDescription GrblCmm::read_info() {
   description::MachineDescription info = settings_.machine;
   info.name = "Grbl 1.1 machine on " + settings_.device;
   info.active_tip = active().id;
+  info.tool_changer = false;  // Grbl has no tool changer: select_tip only says which stylus is fitted
   return info;
 }
 

@@ -70,7 +70,7 @@ std::vector<MapPoint> deviation_map_points(const MeasurementResult& result) {
     const EdgeInspection* inspected = nullptr;
     if (result.inspection) {
       const auto it = nominal.find(e.id);
-      if (it != nominal.end() && it->second->profile.verdict != Verdict::not_measured) inspected = it->second;
+      if (it != nominal.end() && judged(it->second->profile.verdict)) inspected = it->second;
     }
     if (!measured || (result.inspection && !inspected)) {
       keyed.push_back({-1, {measured ? e.scan->position : e.reference, not_measured_colour(), kNotMeasuredRadiusPx}});

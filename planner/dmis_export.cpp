@@ -96,8 +96,7 @@ TouchMotion check_touch(const Touch& t, double r) {
     refuse(name + ": a coordinate or distance is not finite");
   if (std::abs(t.direction.norm() - 1) > unit_tolerance) refuse(name + ": direction is not a unit vector");
   if ((t.nominal_centre - (t.surface_point - r * t.direction)).norm() > length_tolerance_mm)
-    refuse(name + ": nominal centre is not surface point - r*direction for the active tip's ball radius r = " + mm(r) +
-           " mm");
+    refuse(name + ": nominal centre is not surface point - r*direction for its tip's ball radius r = " + mm(r) + " mm");
   const Vec3 to_contact = t.nominal_centre - t.start;
   const double approach = to_contact.dot(t.direction);
   if (approach <= length_tolerance_mm || (to_contact - approach * t.direction).norm() > length_tolerance_mm)
@@ -288,8 +287,7 @@ std::vector<DmisFeature> dmis_features(const MoveProgram& program, const std::ve
 void write_dmis(std::ostream& out, const MoveProgram& program, const description::MachineDescription& machine,
                 const std::vector<DmisFeature>& features, const DmisOptions& options) {
   const description::StylusTip& tip = active_tip(machine);
-  const double r = tip.ball_radius_mm;
-  if (!(r > 0 && std::isfinite(r))) refuse("the active tip's ball radius is not positive");
+  if (!(tip.ball_radius_mm > 0 && std::isfinite(tip.ball_radius_mm))) refuse("the active tip's ball radius is not positive");
   if (std::abs(tip.direction.norm() - 1) > unit_tolerance) refuse("the active tip's direction is not a unit vector");
   if (!(machine.max_speed_mm_s > 0) || !(machine.probe_speed_mm_s > 0)) refuse("the machine's speeds are not positive");
   if (!finite(program.home) || !std::isfinite(program.clearance_z)) refuse("home or clearance plane is not finite");
@@ -299,7 +297,9 @@ void write_dmis(std::ostream& out, const MoveProgram& program, const description
   for (std::size_t i = 0; i < program.touches.size(); ++i) {
     const Touch& t = program.touches[i];
     if (!by_id.emplace(t.id, i).second) refuse("two touches have id " + std::to_string(t.id));
-    motions.push_back(check_touch(t, r));
+    const description::StylusTip* own = t.tip.empty() ? &tip : machine.find_tip(t.tip);
+    if (own == nullptr) refuse("touch " + std::to_string(t.id) + " is made with tip " + t.tip + ", which the machine does not have");
+    motions.push_back(check_touch(t, own->ball_radius_mm));
   }
   std::set<std::string> labels;
   std::vector<int> owner(program.touches.size(), -1);
@@ -338,12 +338,22 @@ void write_dmis(std::ostream& out, const MoveProgram& program, const description
     << "; machine frame M, mm; GOTO positions are ball centres\n";
   s << "UNITS/MM,ANGDEC\n";
   s << "MODE/PROG,MAN\n";
-  const std::string sensor = sensor_label(tip.id);
-  // FIXED,CART: the ball centre's offset from the probe's reference point, then the stylus vector
-  // from the ball toward the head (0,0,1 for a vertical probe), then the ball diameter.
-  s << "S(" << sensor << ")=SNSDEF/PROBE,FIXED,CART," << xyz(tip.offset) << ","
-    << ijk(-tip.direction.normalized()) << "," << mm(2 * r) << '\n';
-  s << "SNSLCT/S(" << sensor << ")\n";
+  // Every tip the program uses, the active one first. FIXED,CART: the ball centre's offset from the
+  // probe's reference point, then the stylus vector from the ball toward the head (0,0,1 for a
+  // vertical probe), then the ball diameter.
+  std::vector<const description::StylusTip*> used{&tip};
+  for (const Motion& m : program.motions)
+    if (m.kind == MotionKind::change_tip) {
+      const description::StylusTip* next = machine.find_tip(m.tip);
+      if (next == nullptr) refuse("the program changes to tip " + m.tip + ", which the machine does not have");
+      if (std::find(used.begin(), used.end(), next) == used.end()) used.push_back(next);
+    }
+  for (const description::StylusTip* t : used) {
+    if (!(t->ball_radius_mm > 0 && std::isfinite(t->ball_radius_mm))) refuse("tip " + t->id + "'s ball radius is not positive");
+    s << "S(" << sensor_label(t->id) << ")=SNSDEF/PROBE,FIXED,CART," << xyz(t->offset) << ","
+      << ijk(-t->direction.normalized()) << "," << mm(2 * t->ball_radius_mm) << '\n';
+  }
+  s << "SNSLCT/S(" << sensor_label(tip.id) << ")\n";
   // m/min, the one speed unit every DMIS version has; 4 decimals resolve 0.002 mm/s.
   s << "FEDRAT/POSVEL,MPM," << mm(machine.max_speed_mm_s * 0.06) << '\n';
   s << "FEDRAT/MESVEL,MPM," << mm(machine.probe_speed_mm_s * 0.06) << '\n';
@@ -368,6 +378,12 @@ void write_dmis(std::ostream& out, const MoveProgram& program, const description
     const auto touch = by_id.find(m.touch);
     if (m.touch >= 0 && touch == by_id.end())
       refuse("a motion belongs to touch " + std::to_string(m.touch) + ", which is not in the program");
+    if (m.kind == MotionKind::change_tip) {
+      close();
+      s << "SNSLCT/S(" << sensor_label(m.tip) << ")\n";
+      path.moved_to(m.to);  // the same place; the new tip's ball centre is elsewhere by the offsets' difference
+      continue;
+    }
     if (touch == by_id.end()) {
       close();
     } else if (const std::size_t k = feature_of[touch->second]; open != k) {

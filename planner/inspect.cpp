@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <string>
 
 #include "planner/number_text.hpp"
@@ -12,27 +13,34 @@ namespace cmm::planner {
 
 namespace {
 
-void count(VerdictCounts& counts, Verdict verdict) {
-  switch (verdict) {
-    case Verdict::pass: ++counts.pass; break;
-    case Verdict::fail: ++counts.fail; break;
-    case Verdict::undecided: ++counts.undecided; break;
-    case Verdict::not_measured: ++counts.not_measured; break;
-  }
+// A feature left out of the scope: excluded, with the scope's reason and, for one the plan could not
+// probe, the plan's own; counted under the scope's reason.
+std::string excluded_reason(const std::string& cause, const std::string& plan_reason, bool is_edge, InspectionResult& out) {
+  auto group = std::find_if(out.exclusions.begin(), out.exclusions.end(), [&](const Exclusion& e) { return e.reason == cause; });
+  if (group == out.exclusions.end()) group = out.exclusions.insert(out.exclusions.end(), Exclusion{cause});
+  ++(is_edge ? group->edge_points : group->holes);
+  return cause == kNotProbeable && !plan_reason.empty() ? cause + ": " + plan_reason : cause;
 }
 
-Verdict job_verdict(const VerdictCounts& edges, const VerdictCounts& holes) {
-  if (edges.fail + holes.fail > 0) return Verdict::fail;
-  if (edges.undecided + holes.undecided > 0) return Verdict::undecided;
-  if (edges.pass + holes.pass > 0) return Verdict::pass;
-  return Verdict::not_measured;
+// The scope's ids that name no feature of the model: asked for in vain, which the result says.
+void note_unknown_ids(const std::set<int>& ids, std::size_t count, const char* what, std::vector<std::string>& notes) {
+  for (int id : ids)
+    if (id < 0 || static_cast<std::size_t>(id) >= count)
+      notes.push_back(std::string("inspect: the model has no ") + what + " " + std::to_string(id));
 }
 
-EdgeInspection inspect_edge(const EdgeResult& edge, int curve, const NominalModel& nominal, const Tolerances& tolerances) {
+// `excluded`: why the scope leaves the point out ("" when it does not).
+EdgeInspection inspect_edge(const EdgeResult& edge, int curve, const NominalModel& nominal, const Tolerances& tolerances,
+                            const std::string& excluded) {
   EdgeInspection out;
   out.id = edge.id;
   const double t = tolerances.edge_profile_for(edge.id, curve);
   out.profile.zone = {-t, t};
+  if (!excluded.empty()) {
+    out.profile.verdict = Verdict::excluded;
+    out.reason = excluded;
+    return out;
+  }
   if (edge.status != FeatureStatus::measured || !edge.scan) {
     out.reason = edge.reason.empty() ? "not measured" : edge.reason;
     return out;
@@ -58,12 +66,18 @@ EdgeInspection inspect_edge(const EdgeResult& edge, int curve, const NominalMode
   return out;
 }
 
-HoleInspection inspect_hole(const HoleResult& hole, const NominalModel& nominal, const Tolerances& tolerances) {
+HoleInspection inspect_hole(const HoleResult& hole, const NominalModel& nominal, const Tolerances& tolerances,
+                            const std::string& excluded) {
   HoleInspection out;
   out.id = hole.id;
   const HoleTolerance& tolerance = tolerances.hole_for(hole.id);
   out.diameter.zone = tolerance.diameter;
   out.position.zone = {0, tolerance.position_mm};
+  if (!excluded.empty()) {
+    out.diameter.verdict = out.position.verdict = Verdict::excluded;
+    out.reason = excluded;
+    return out;
+  }
   if (hole.status != FeatureStatus::measured || !hole.scan) {
     out.reason = hole.reason.empty() ? "not measured" : hole.reason;
     return out;
@@ -96,21 +110,31 @@ double nominal_edge_reach_mm(const Tolerances& tolerances, double profile_mm) {
 }
 
 InspectionResult inspect(const MeasurementResult& result, const std::vector<geometry::EdgePoint>& reference_points,
-                         const NominalModel& nominal, const Tolerances& tolerances, const NominalPlacement& placement) {
+                         const NominalModel& nominal, const Tolerances& tolerances, const NominalPlacement& placement,
+                         const InspectionScope& scope) {
   InspectionResult out;
   out.nominal = placement;
   out.tolerances = tolerances;
+  out.scope = scope;
   for (const EdgeResult& edge : result.edges) {
     const int curve = edge.id >= 0 && static_cast<std::size_t>(edge.id) < reference_points.size()
                           ? reference_points[static_cast<std::size_t>(edge.id)].curve
                           : -1;
-    out.edges.push_back(inspect_edge(edge, curve, nominal, tolerances));
-    count(out.edge_counts, out.edges.back().profile.verdict);
+    const std::string cause = edge_exclusion(scope, edge.id, curve, edge.status != FeatureStatus::not_planned);
+    const std::string excluded = cause.empty() ? cause : excluded_reason(cause, edge.reason, true, out);
+    out.edges.push_back(inspect_edge(edge, curve, nominal, tolerances, excluded));
+    out.edge_counts.add(out.edges.back().profile.verdict);
   }
   for (const HoleResult& hole : result.holes) {
-    out.holes.push_back(inspect_hole(hole, nominal, tolerances));
-    count(out.hole_counts, worse(out.holes.back().diameter.verdict, out.holes.back().position.verdict));
+    const std::string cause = hole_exclusion(scope, hole.id, hole.status != FeatureStatus::not_planned);
+    const std::string excluded = cause.empty() ? cause : excluded_reason(cause, hole.reason, false, out);
+    out.holes.push_back(inspect_hole(hole, nominal, tolerances, excluded));
+    out.hole_counts.add(worse(out.holes.back().diameter.verdict, out.holes.back().position.verdict));
   }
+  note_unknown_ids(scope.edge_points.value_or(std::set<int>()), result.edges.size(), "edge point", out.notes);
+  note_unknown_ids(scope.excluded_edge_points, result.edges.size(), "edge point", out.notes);
+  note_unknown_ids(scope.holes.value_or(std::set<int>()), result.holes.size(), "hole", out.notes);
+  note_unknown_ids(scope.excluded_holes, result.holes.size(), "hole", out.notes);
   out.verdict = job_verdict(out.edge_counts, out.hole_counts);
   return out;
 }

@@ -10,16 +10,24 @@
 #include <Eigen/Geometry>
 
 #include "geometry/mesh.hpp"
+#include "planner/inspection_scope.hpp"
 
 namespace cmm::planner {
 
 using geometry::Vec3;
 
-// A feature's conformance by ISO 14253-1 with the expanded uncertainty U of its measurement:
+// A characteristic's conformance by ISO 14253-1 with the expanded uncertainty U of its measurement:
 // pass when the whole interval deviation ± U lies inside the tolerance, fail when it lies wholly
-// outside, undecided when it straddles a limit, not_measured when there is no measurement.
-enum class Verdict { pass, fail, undecided, not_measured };
+// outside, undecided when it straddles a limit; not_measured when the job was asked to inspect it and
+// has no measurement, excluded when the request left it out on purpose (the reason says why).
+// A job's verdict is pass, fail, undecided or incomplete: incomplete when a characteristic it was
+// asked to inspect was not measured (or none was), so that omission never reads as a pass.
+enum class Verdict { pass, fail, undecided, incomplete, not_measured, excluded };
 const char* to_string(Verdict verdict);
+// A characteristic's verdict that rests on a measurement: pass, fail or undecided.
+inline bool judged(Verdict verdict) {
+  return verdict == Verdict::pass || verdict == Verdict::fail || verdict == Verdict::undecided;
+}
 
 // Limits on a deviation, lower ≤ upper (a symmetric ± t is {−t, +t}).
 struct ToleranceZone {
@@ -97,22 +105,46 @@ struct NominalPlacement {
   double overlap = 1;              // ICP: share of samples paired within the rejection distance
 };
 
+// Features by verdict (a hole counts once, by its worse characteristic). `excluded` ones were left
+// out on purpose and are no part of the verdict; `not_measured` ones were asked for and make it incomplete.
 struct VerdictCounts {
-  int pass = 0, fail = 0, undecided = 0, not_measured = 0;
+  int pass = 0, fail = 0, undecided = 0, not_measured = 0, excluded = 0;
+  void add(Verdict verdict);  // incomplete counts as not_measured
+  int inspected() const { return pass + fail + undecided + not_measured; }  // asked for
+  int measured() const { return pass + fail + undecided; }                  // asked for and judged
+};
+
+// How many features were left out on purpose for one reason ("not asked for", "not probeable in
+// this set-up", a request's own reason).
+struct Exclusion {
+  std::string reason;
+  int edge_points = 0, holes = 0;
 };
 
 // The job's inspection: present only when the job named a nominal model.
 struct InspectionResult {
   NominalPlacement nominal;
   Tolerances tolerances;
+  InspectionScope scope;              // what the job was asked to inspect
   std::vector<EdgeInspection> edges;  // one per result edge point, same order
   std::vector<HoleInspection> holes;  // one per result hole, same order
   VerdictCounts edge_counts, hole_counts;  // a hole counts once: its worse characteristic
-  // The job's verdict: fail if any feature fails, else undecided if any is undecided, else pass
-  // (features not measured are counted apart and do not decide; none measured: not_measured).
-  Verdict verdict = Verdict::not_measured;
+  std::vector<Exclusion> exclusions;       // the excluded features by reason, in the order first met
+  std::vector<std::string> notes;          // e.g. an id the request named that the model does not have
+  Verdict verdict = Verdict::incomplete;   // job_verdict(edge_counts, hole_counts)
 };
 
-Verdict worse(Verdict a, Verdict b);  // fail > undecided > pass > not_measured
+// fail > incomplete > not_measured > undecided > pass > excluded: a feature with one characteristic
+// not measured is not measured, whatever its other one says; an excluded one decides nothing.
+Verdict worse(Verdict a, Verdict b);
+
+// The job's verdict: fail if any feature fails; else incomplete if any feature asked for was not
+// measured, or none was measured at all; else undecided if any is; else pass.
+Verdict job_verdict(const VerdictCounts& edges, const VerdictCounts& holes);
+
+// The verdict's coverage in one line, as every output prints it after the verdict: "340 of 342
+// inspected edge points measured (2 not measured), 3 of 3 inspected holes measured; 379 edge points,
+// 2 holes excluded (not probeable in this set-up)".
+std::string coverage_text(const InspectionResult& inspection);
 
 }  // namespace cmm::planner

@@ -2,6 +2,7 @@
 #include "planner/inspection_json.hpp"
 
 #include "hal/description/eigen_json.hpp"
+#include "planner/inspection_scope_json.hpp"
 #include "planner/tolerances_json.hpp"
 
 namespace cmm::planner {
@@ -12,7 +13,7 @@ using description::vec3_json;
 using nlohmann::json;
 
 json characteristic_json(const Characteristic& c) {
-  const bool measured = c.verdict != Verdict::not_measured;
+  const bool measured = judged(c.verdict);
   return {{"deviation_mm", measured ? json(c.deviation_mm) : json(nullptr)},
           {"uncertainty_mm", measured ? json(c.uncertainty_mm) : json(nullptr)},
           {"tolerance_mm", json::array({c.zone.lower_mm, c.zone.upper_mm})},
@@ -25,7 +26,11 @@ json reason_json(const std::string& reason) { return reason.empty() ? json(nullp
 }  // namespace
 
 json to_json(const VerdictCounts& c) {
-  return {{"pass", c.pass}, {"fail", c.fail}, {"undecided", c.undecided}, {"not_measured", c.not_measured}};
+  return {{"pass", c.pass},
+          {"fail", c.fail},
+          {"undecided", c.undecided},
+          {"not_measured", c.not_measured},
+          {"excluded", c.excluded}};
 }
 
 json to_json(const EdgeInspection& e) {
@@ -47,6 +52,9 @@ json to_json(const HoleInspection& h) {
 
 json to_json(const InspectionResult& inspection) {
   const NominalPlacement& n = inspection.nominal;
+  json exclusions = json::array();
+  for (const Exclusion& e : inspection.exclusions)
+    exclusions.push_back({{"reason", e.reason}, {"edge_points", e.edge_points}, {"holes", e.holes}});
   return {{"nominal", {{"model", n.model},
                        {"method", n.method},
                        {"T_S_N", description::transform_json(n.T_S_N)},
@@ -55,8 +63,12 @@ json to_json(const InspectionResult& inspection) {
                        {"rms_mm", n.rms_mm},
                        {"overlap", n.overlap}}},
           {"tolerances", to_json(inspection.tolerances)},
+          {"inspect", to_json(inspection.scope)},
           {"verdict", to_string(inspection.verdict)},
-          {"counts", {{"edge_points", to_json(inspection.edge_counts)}, {"holes", to_json(inspection.hole_counts)}}}};
+          {"coverage", coverage_text(inspection)},
+          {"counts", {{"edge_points", to_json(inspection.edge_counts)}, {"holes", to_json(inspection.hole_counts)}}},
+          {"exclusions", std::move(exclusions)},
+          {"notes", inspection.notes}};
 }
 
 }  // namespace cmm::planner

@@ -8,7 +8,7 @@
 
 namespace cmm::planner {
 
-// {"nominal", "tolerances", "verdict", "counts"}
+// {"nominal", "tolerances", "inspect", "verdict", "coverage", "counts", "exclusions", "notes"}
 nlohmann::json to_json(const InspectionResult& inspection);
 nlohmann::json to_json(const EdgeInspection& edge);
 nlohmann::json to_json(const HoleInspection& hole);

@@ -94,7 +94,7 @@ std::string counts_row(const char* name, const VerdictCounts& c) {
   return concat("<tr><th>", name, "</th><td class=\"num v-pass\">", std::to_string(c.pass),
                 "</td><td class=\"num v-fail\">", std::to_string(c.fail), "</td><td class=\"num v-undecided\">",
                 std::to_string(c.undecided), "</td><td class=\"num v-not-measured\">", std::to_string(c.not_measured),
-                "</td></tr>\n");
+                "</td><td class=\"num v-excluded\">", std::to_string(c.excluded), "</td></tr>\n");
 }
 
 std::string placement_text(const NominalPlacement& p) {
@@ -113,10 +113,13 @@ std::string verdict_section(const MeasurementResult& result) {
     for (char& c : big) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
     html += concat("<div class=\"verdict ", verdict_class(inspection->verdict), "\">", big, "</div>\n");
     html += "<table class=\"grid counts\"><thead><tr><th></th><th class=\"num\">pass</th><th class=\"num\">fail</th>"
-            "<th class=\"num\">undecided</th><th class=\"num\">not measured</th></tr></thead>\n";
+            "<th class=\"num\">undecided</th><th class=\"num\">not measured</th><th class=\"num\">excluded</th></tr>"
+            "</thead>\n";
     html += counts_row("Edge points", inspection->edge_counts);
     html += counts_row("Holes", inspection->hole_counts);
     html += "</table>\n</div>\n";
+    // The verdict is only as good as what it covers: the coverage in words, and why features were left out.
+    html += concat("<p class=\"coverage\">", escape_html(coverage_text(*inspection)), ".</p>\n");
     const Tolerances& t = inspection->tolerances;
     html += concat("<p>Against the nominal model ", escape_html(or_none(inspection->nominal.model)), ", ",
                    placement_text(inspection->nominal), ".</p>\n");
@@ -128,7 +131,8 @@ std::string verdict_section(const MeasurementResult& result) {
     html += concat("<p class=\"small\">Decision rule ISO 14253-1: pass when deviation ± U lies inside the "
                    "tolerance, fail when it lies wholly outside, undecided otherwise; U = k·√(σ² + u²) with k = ",
                    fixed(t.coverage_factor, 2), " and the machine's u = ", report_mm(t.machine_uncertainty_mm),
-                   " mm. A hole counts once, by its worse characteristic.</p>\n");
+                   " mm. A hole counts once, by its worse characteristic. The part is incomplete, never pass, when a "
+                   "feature it was asked to inspect was not measured; one left out on purpose is counted excluded.</p>\n");
   } else {
     html += "<div class=\"verdict v-none\">NO VERDICT</div>\n<p>No nominal: no verdict, deviations are against the "
             "scan.</p>\n</div>\n";
@@ -216,7 +220,7 @@ std::string histogram_section(const MeasurementResult& result) {
   std::string caption;
   if (const auto& inspection = result.inspection) {
     for (const EdgeInspection& e : inspection->edges) {
-      if (e.profile.verdict != Verdict::not_measured) deviations.push_back(e.profile.deviation_mm);
+      if (judged(e.profile.verdict)) deviations.push_back(e.profile.deviation_mm);
     }
     const double t = inspection->tolerances.edge_profile_mm;
     limits = ToleranceZone{-t, t};

@@ -28,6 +28,11 @@ struct MeasurementPlanOptions {
   TouchPlanOptions touch;
   double clearance_gap_mm = 5;  // the travel plane is at least this far above the part's top and the ball
   int threads = 0;              // 0: one per hardware thread
+  // The tips the plan may use, the first the job's primary: an edge point goes to the first that can
+  // measure it, a bore to the one with the largest ball that can (the largest ball a feature allows
+  // averages the most roughness and keeps the shaft clear: the stylus makers' rule). Each tip's radius
+  // is the machine's for it; touch.radius is not used then. Empty: the active tip alone, at touch.radius.
+  std::vector<std::string> tips;
   geometry::CancelCheck cancel;  // polled between edge points; plan_measurement then throws geometry::Cancelled
 };
 

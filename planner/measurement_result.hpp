@@ -31,6 +31,7 @@ struct EdgeResult {
   FeatureStatus status = FeatureStatus::not_planned;
   std::string reason;         // failed / not_planned: why; measured: the plan's note (e.g. why faces)
   std::vector<int> touch_ids;  // the plan's touches this point was measured with
+  std::string tip;             // the tip that made them
   Vec3 reference = Vec3::Zero();  // the reference point, S
   // Set when measured: the same point in M (as compensated) and in S (through T_M_S⁻¹).
   std::optional<MeasuredPoint> machine, scan;
@@ -42,6 +43,7 @@ struct HoleResult {
   FeatureStatus status = FeatureStatus::not_planned;
   std::string reason;
   std::vector<int> touch_ids;
+  std::string tip;  // the tip that made them
   double depth_mm = 0;                // planned touch depth below the entry rim
   Vec3 nominal_centre = Vec3::Zero(); // the model's entry-rim centre, S
   Vec3 nominal_axis = Vec3::UnitZ();  // unit, S, out of the material

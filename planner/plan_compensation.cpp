@@ -74,6 +74,9 @@ void measure_feature(Result& r, const std::vector<Touch>& planned, const Context
   r.status = FeatureStatus::measured;
 }
 
+// The radius a feature's touches were planned for: its tip's, or the job's one radius.
+double radius_of(double planned_mm, const Context& c) { return planned_mm > 0 ? planned_mm : c.options.ball_radius_mm; }
+
 // In M, as compensated: by two touches through the reference point or by the two faces' planes.
 MeasuredPoint measure_in_machine(const geometry::EdgePoint& point, const EdgePlan& plan, const std::vector<Vec3>& centres,
                                  const Context& c) {
@@ -88,7 +91,7 @@ MeasuredPoint measure_in_machine(const geometry::EdgePoint& point, const EdgePla
     in.reference_point = c.T_M_S * point.position;
     in.tangent = R * plan.window->plane_normal;
     in.window_axis = R * plan.window->axis;
-    in.ball_radius_mm = c.options.ball_radius_mm;
+    in.ball_radius_mm = radius_of(plan.radius_mm, c);
     in.trigger_sigma_mm = c.options.trigger_sigma_mm;
     for (int i = 0; i < 2; ++i) {
       in.centre[i] = centres[static_cast<std::size_t>(i)];
@@ -100,7 +103,7 @@ MeasuredPoint measure_in_machine(const geometry::EdgePoint& point, const EdgePla
   in.id = point.id;
   in.reference_point = c.T_M_S * point.position;
   in.tangent = R * point.tangent;
-  in.ball_radius_mm = c.options.ball_radius_mm;
+  in.ball_radius_mm = radius_of(plan.radius_mm, c);
   in.trigger_sigma_mm = c.options.trigger_sigma_mm;
   in.up.nominal_normal = R * point.n_up;
   in.down.nominal_normal = R * point.n_down.value_or(Vec3::Zero());
@@ -116,6 +119,7 @@ EdgeResult compensate_edge(const geometry::EdgePoint& point, const EdgePlan& pla
   r.method = plan.method;
   r.reference = point.position;
   r.touch_ids = ids_of(plan.touches);
+  r.tip = plan.tip;
   r.reason = plan.reason;
   if (plan.method == EdgeMethod::none) return r;
   measure_feature(r, plan.touches, c, [&](const std::vector<Vec3>& centres) {
@@ -141,6 +145,7 @@ HoleResult compensate_bore(const geometry::Hole& hole, const BorePlan& plan, con
   r.id = hole.id;
   r.reason = plan.reason;
   r.touch_ids = ids_of(plan.touches);
+  r.tip = plan.tip;
   r.depth_mm = plan.depth_mm;
   r.nominal_centre = hole.centre;
   r.nominal_axis = hole.axis.normalized();
@@ -151,7 +156,7 @@ HoleResult compensate_bore(const geometry::Hole& hole, const BorePlan& plan, con
     in.hole_id = hole.id;
     in.centres = centres;
     in.axis = c.T_M_S.linear() * r.nominal_axis;
-    in.ball_radius_mm = c.options.ball_radius_mm;
+    in.ball_radius_mm = radius_of(plan.radius_mm, c);
     in.trigger_sigma_mm = c.options.trigger_sigma_mm;
     r.machine = measure_bore(in);
     r.scan = to_scan_frame(*r.machine, c.T_M_S);

@@ -41,11 +41,13 @@ void add_edge_plan(json& point, const EdgePlan& plan) {
     point["beta_deg"] = {degrees(plan.beta_rad[0]), degrees(plan.beta_rad[1])};
   }
   point["touches"] = touch_ids(plan.touches);
+  point["tip"] = plan.method != EdgeMethod::none ? json(plan.tip) : json(nullptr);
 }
 
 void add_bore_plan(json& hole, const BorePlan& plan) {
   hole["bore"] = plan.planned ? json{{"depth_mm", plan.depth_mm}, {"touches", touch_ids(plan.touches)}} : json(nullptr);
   hole["bore_reason"] = plan.planned ? json(nullptr) : json(plan.reason);
+  hole["tip"] = plan.planned ? json(plan.tip) : json(nullptr);
 }
 
 }  // namespace
@@ -66,6 +68,7 @@ json to_json(const Touch& t, double clearance_z, double probe_speed_mm_s) {
   if (t.edge_point >= 0) j["edge_point"] = t.edge_point;
   if (t.hole >= 0) j["hole"] = t.hole;
   if (t.corner >= 0) j["corner"] = t.corner;
+  if (!t.tip.empty()) j["tip"] = t.tip;
   return j;
 }
 
@@ -78,6 +81,7 @@ json to_json(const Motion& m) {
     j["min_travel_mm"] = m.min_travel_mm;
     j["retract_mm"] = m.retract_mm;
   }
+  if (m.kind == MotionKind::change_tip) j["tip"] = m.tip;
   return j;
 }
 

@@ -199,31 +199,44 @@ void write_ids(XmlWriter& w, const char* tag, const std::vector<int>& ids) {
 
 // ---- Verdicts -------------------------------------------------------------------------------------
 
-// A characteristic's Status (CharacteristicStatusEnum). Our undecided (deviation ± U straddles a
-// limit: ISO 14253-1 proves neither conformance nor non-conformance) is QIF's INDETERMINATE; a
-// characteristic without a measurement is NOT_ANALYZED and carries no value.
-const char* characteristic_status(Verdict verdict) {
+// A status element's tag and text: the schema's enumeration where it has our word, else its
+// free-text alternative (OtherCharacteristicStatus, OtherInspectionStatus), which QIF offers for that.
+struct Status {
+  const char* element;
+  const char* value;
+};
+
+// A characteristic's Status. Our undecided (deviation ± U straddles a limit: ISO 14253-1 proves
+// neither conformance nor non-conformance) is QIF's INDETERMINATE. CharacteristicStatusEnum has no
+// word for a characteristic asked for and not measured (NOT_ANALYZED would say measured and not
+// evaluated), nor for one left out on purpose: NOT_MEASURED and EXCLUDED go as free text.
+Status characteristic_status(Verdict verdict) {
   switch (verdict) {
-    case Verdict::pass: return "PASS";
-    case Verdict::fail: return "FAIL";
-    case Verdict::undecided: return "INDETERMINATE";
+    case Verdict::pass: return {"CharacteristicStatusEnum", "PASS"};
+    case Verdict::fail: return {"CharacteristicStatusEnum", "FAIL"};
+    case Verdict::undecided: return {"CharacteristicStatusEnum", "INDETERMINATE"};
+    case Verdict::excluded: return {"OtherCharacteristicStatus", "EXCLUDED"};
+    case Verdict::incomplete:
     case Verdict::not_measured: break;
   }
-  return "NOT_ANALYZED";
+  return {"OtherCharacteristicStatus", "NOT_MEASURED"};
 }
 
-// The part's InspectionStatus (InspectionStatusEnum, which has no INDETERMINATE): undecided is
-// UNKNOWN, nothing measured NOT_MEASURED, and a job without a nominal (no verdicts at all)
-// NOT_CALCULATED.
-const char* inspection_status(const std::optional<InspectionResult>& inspection) {
-  if (!inspection) return "NOT_CALCULATED";
+// The part's InspectionStatus (InspectionStatusEnum, which has neither INDETERMINATE nor INCOMPLETE):
+// undecided is UNKNOWN; incomplete (a characteristic asked for and not measured) is the free-text
+// OtherInspectionStatus "INCOMPLETE", never a PASS and not the UNKNOWN an undecided part gets; a job
+// without a nominal (no verdicts at all) NOT_CALCULATED.
+Status inspection_status(const std::optional<InspectionResult>& inspection) {
+  if (!inspection) return {"InspectionStatusEnum", "NOT_CALCULATED"};
   switch (inspection->verdict) {
-    case Verdict::pass: return "PASS";
-    case Verdict::fail: return "FAIL";
-    case Verdict::undecided: return "UNKNOWN";
-    case Verdict::not_measured: break;
+    case Verdict::pass: return {"InspectionStatusEnum", "PASS"};
+    case Verdict::fail: return {"InspectionStatusEnum", "FAIL"};
+    case Verdict::undecided: return {"InspectionStatusEnum", "UNKNOWN"};
+    case Verdict::incomplete:
+    case Verdict::not_measured:
+    case Verdict::excluded: break;
   }
-  return "NOT_MEASURED";
+  return {"OtherInspectionStatus", "INCOMPLETE"};
 }
 
 // ---- What is written, with its ids ------------------------------------------------------------------
@@ -507,7 +520,9 @@ class QifDocument {
 
     w_.open("DetachableSensors", {{"n", "1"}});
     w_.open("SimpleTactileProbeSensor", {{"id", std::to_string(probe_)}});
-    w_.leaf("Name", tip.id.empty() ? std::string("tip") : "tip " + tip.id);
+    // A tip measured with its nominal values says so where a reader of the QIF looks for the sensor.
+    w_.leaf("Name", (tip.id.empty() ? std::string("tip") : "tip " + tip.id) +
+                        (tip.qualified_utc.empty() ? " (nominal tip, not qualified)" : ""));
     const Field field{"tip", -1, "offset"};
     write_attributes(w_, {{"AttributeD3", "offset_M", vector3(tip.offset_M, field)}});
     if (!tip.qualified_utc.empty()) {
@@ -751,7 +766,7 @@ class QifDocument {
     write_transforms();
 
     w_.open("InspectionStatus");
-    w_.leaf("InspectionStatusEnum", inspection_status(inspection));
+    w_.leaf(inspection_status(inspection).element, inspection_status(inspection).value);
     w_.close();
     write_ids(w_, "ActualComponentIds", {actual_component_});
     w_.close();
@@ -761,7 +776,7 @@ class QifDocument {
     w_.open("ActualComponentSet", {{"n", "1"}});
     w_.open("ActualComponent", {{"id", std::to_string(actual_component_)}});
     w_.open("Status");
-    w_.leaf("InspectionStatusEnum", inspection_status(inspection));
+    w_.leaf(inspection_status(inspection).element, inspection_status(inspection).value);
     w_.close();
     w_.close();
     w_.close();
@@ -827,15 +842,17 @@ class QifDocument {
   void write_characteristic_measurement(const char* tag, const CharacteristicIds& ids, const Characteristic& c,
                                         double offset, int feature_measurement, const std::string& reason,
                                         const Field& field) {
-    const bool judged = feature_measurement != 0 && c.verdict != Verdict::not_measured;
+    const bool judged = feature_measurement != 0 && planner::judged(c.verdict);
+    const Verdict verdict = judged || c.verdict == Verdict::excluded ? c.verdict : Verdict::not_measured;
     w_.open(tag, {{"id", std::to_string(ids.measurement)}});
     if (judged) {
       write_attributes(w_, {{"AttributeD1", "expanded_uncertainty_mm", number(c.uncertainty_mm, field)}});
     } else {
-      w_.leaf("Description", reason.empty() ? std::string("not measured") : "not measured: " + reason);
+      const std::string why = verdict == Verdict::excluded ? "excluded" : "not measured";
+      w_.leaf("Description", reason.empty() ? why : why + ": " + reason);
     }
     w_.open("Status");
-    w_.leaf("CharacteristicStatusEnum", judged ? characteristic_status(c.verdict) : characteristic_status(Verdict::not_measured));
+    w_.leaf(characteristic_status(verdict).element, characteristic_status(verdict).value);
     w_.close();
     w_.leaf("CharacteristicItemId", ids.item);
     if (feature_measurement) write_ids(w_, "FeatureMeasurementIds", {feature_measurement});

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <set>
 
 #include "geometry/file_error.hpp"
@@ -98,14 +99,19 @@ std::string length_name(const description::Plate* plate, int a, int b) {
 }
 
 // One corner that every failing length involves is most likely the one that is off.
-std::string common_corner_hint(const std::vector<std::pair<int, int>>& failing) {
-  if (failing.size() < 2) return "";
+std::optional<int> common_corner(const std::vector<std::pair<int, int>>& failing) {
+  if (failing.size() < 2) return std::nullopt;
   for (int candidate : {failing[0].first, failing[0].second}) {
     if (std::all_of(failing.begin(), failing.end(),
                     [&](const auto& p) { return p.first == candidate || p.second == candidate; }))
-      return " (" + corner_name(candidate) + " is in every one: it is probably the one that is off)";
+      return candidate;
   }
-  return "";
+  return std::nullopt;
+}
+
+std::string common_corner_hint(const std::vector<std::pair<int, int>>& failing) {
+  const std::optional<int> common = common_corner(failing);
+  return common ? " (" + corner_name(*common) + " is in every one: it is probably the one that is off)" : "";
 }
 
 void check_nominal_lengths(const std::vector<int>& ids, const Frame& frame, const description::Plate& plate, double tolerance) {
@@ -124,7 +130,9 @@ void check_nominal_lengths(const std::vector<int>& ids, const Frame& frame, cons
                  " mm in " + frame.name + ", the plate says " + fixed(nominal) + " mm";
     }
   if (failing.empty()) return;
-  throw RegistrationError(Kind::nominal_length, {named.begin(), named.end()},
+  // The corner to blame, when one is in every failing length; else every corner named.
+  const std::optional<int> common = common_corner(failing);
+  throw RegistrationError(Kind::nominal_length, common ? std::vector<int>{*common} : std::vector<int>(named.begin(), named.end()),
                           message + " (tolerance " + fixed(tolerance) + " mm)" + common_corner_hint(failing));
 }
 
@@ -244,6 +252,23 @@ FiducialCheck check_fiducial(const description::Plate& plate, const std::vector<
 }
 
 }  // namespace
+
+const char* to_string(RegistrationError::Kind kind) {
+  switch (kind) {
+    case Kind::too_few_corners: return "too_few_corners";
+    case Kind::bad_corner_id: return "bad_corner_id";
+    case Kind::not_finite: return "not_finite";
+    case Kind::coincident: return "coincident";
+    case Kind::collinear: return "collinear";
+    case Kind::nominal_length: return "nominal_length";
+    case Kind::frame_length: return "frame_length";
+    case Kind::mirrored: return "mirrored";
+    case Kind::rms: return "rms";
+    case Kind::fiducial: return "fiducial";
+    case Kind::probing: return "probing";
+  }
+  return "?";
+}
 
 RegistrationInput registration_from_json(const json& j, const std::string& source,
                                          const std::filesystem::path& base_dir) {
@@ -397,6 +422,62 @@ RegistrationResult fit_registration(const RegistrationInput& input, const descri
                            "plate's size, handedness or fiducial");
   }
   return result;
+}
+
+void check_plate_corners(const std::vector<int>& ids, const std::vector<Vec3>& points, char frame,
+                         const std::string& what, const description::Plate& plate, double length_tolerance_mm,
+                         const std::optional<Vec3>& up, double degenerate_tolerance) {
+  try {
+    std::set<int> seen;
+    for (int id : ids)
+      if (id < 1 || id > plate.corner_count() || !seen.insert(id).second)
+        throw RegistrationError(Kind::bad_corner_id, {id},
+                                corner_name(id) + " is listed twice or is not a corner of the plate (ids 1–" +
+                                    std::to_string(plate.corner_count()) + ")");
+    if (ids.size() < 3)
+      throw RegistrationError(Kind::too_few_corners, {}, "at least three corners are needed, got " + std::to_string(ids.size()));
+    const Frame f{frame, frame == 'M' ? "machine (M)" : "scan (S)", points};
+    check_finite(ids, f);
+    check_degenerate(ids, f, degenerate_tolerance);
+    try {
+      check_nominal_lengths(ids, f, plate, length_tolerance_mm);
+    } catch (const RegistrationError& e) {
+      // Lengths that are the plate's under another labelling: the corners were given in each
+      // other's places, and which ones is the diagnosis.
+      std::vector<int> relabelled = ids;
+      std::sort(relabelled.begin(), relabelled.end());
+      do {
+        if (relabelled == ids) continue;
+        bool fits = true;
+        for (std::size_t a = 0; a < ids.size() && fits; ++a)
+          for (std::size_t b = a + 1; b < ids.size() && fits; ++b)
+            fits = std::abs((points[a] - points[b]).norm() - (plate.corner(relabelled[a]) - plate.corner(relabelled[b])).norm()) <=
+                   length_tolerance_mm;
+        if (!fits) continue;
+        std::string moves;
+        std::vector<int> named;
+        for (std::size_t i = 0; i < ids.size(); ++i)
+          if (ids[i] != relabelled[i]) {
+            moves += (moves.empty() ? "" : ", ") + std::string("the one given as ") + corner_name(ids[i]) + " is " +
+                     corner_name(relabelled[i]);
+            named.push_back(ids[i]);
+          }
+        throw RegistrationError(e.kind(), named,
+                                std::string(e.what()) + "; the lengths are the plate's with the corners relabelled (" + moves +
+                                    "): corners swapped?");
+      } while (std::next_permutation(relabelled.begin(), relabelled.end()));
+      throw;
+    }
+    // In M the probe comes down along −z, so +z is the top's side; in S only a known up tells.
+    const std::optional<Vec3> top = frame == 'M' ? std::optional<Vec3>(Vec3::UnitZ()) : up;
+    if (top && !(order_normal(ids, points).dot(*top) > 0))
+      throw RegistrationError(Kind::mirrored, ids,
+                              "corners " + sorted_ids(ids) + " go clockwise seen from the plate's top in " +
+                                  std::string(1, frame) + ", but the plate lists its corners counter-clockwise: "
+                                  "the corner order is mirrored (two corners swapped?)");
+  } catch (const RegistrationError& e) {
+    throw RegistrationError(e.kind(), e.corners(), what + ": " + e.what());
+  }
 }
 
 json to_json(const RegistrationResult& r) {

@@ -43,6 +43,8 @@ class RegistrationError : public std::runtime_error {
   std::vector<int> corners_;
 };
 
+const char* to_string(RegistrationError::Kind kind);  // "too_few_corners", "nominal_length", …
+
 struct CornerPair {
   int id = 0;              // the plate's corner id (1-based) when a plate is given; any distinct int otherwise
   Vec3 scan = Vec3::Zero();     // S, mm
@@ -101,6 +103,16 @@ struct RegistrationResult {
 // Checks, fits and checks again; throws RegistrationError naming the first problem found. The plate
 // is `plate` if given, else the input's, else none (then only S against M is checked).
 RegistrationResult fit_registration(const RegistrationInput& input, const description::Plate* plate = nullptr);
+
+// The checks one frame's corners allow alone, before anything moves (job.submit): distinct corner
+// ids of the plate, finite, neither coincident nor collinear, every side and diagonal against the
+// plate within `length_tolerance_mm`, and the counter-clockwise order seen from the top (in M, whose
+// +z is up; in S only with `up`). `what` names the corners in the message ("scan_corners (S)").
+// Throws RegistrationError; for lengths it names the one corner every failing length involves when
+// there is one (a rough corner 30 mm off is that corner's fault, not its neighbours').
+void check_plate_corners(const std::vector<int>& ids, const std::vector<Vec3>& points, char frame,
+                         const std::string& what, const description::Plate& plate, double length_tolerance_mm,
+                         const std::optional<Vec3>& up = std::nullopt, double degenerate_tolerance = 1e-3);
 
 // The plan JSON's "registration": {"T_M_S" (4×4, row-major nested arrays), "residuals_mm" (per
 // corner norm, input order), "rms_mm", "corners", "predicted", "plate_pose", "fiducial", "notes"}.

@@ -38,7 +38,7 @@ void set_characteristic(Row& row, const Characteristic& c, const std::string& to
   if (c.zone != ToleranceZone{}) row.tolerance = tolerance;  // an empty zone: none was decided on
   row.verdict_text = verdict_label(c.verdict);
   row.verdict_css = verdict_class(c.verdict);
-  if (c.verdict == Verdict::not_measured) return;
+  if (!judged(c.verdict)) return;
   row.deviation = report_signed_mm(c.deviation_mm);
   row.uncertainty = report_mm(c.uncertainty_mm);
 }
@@ -65,7 +65,7 @@ Row edge_row(const EdgeResult& e, const EdgeInspection* nominal, bool inspected)
     return row;
   }
   set_characteristic(row, nominal->profile, report_zone(nominal->profile.zone));
-  if (nominal->profile.verdict == Verdict::not_measured && !nominal->reason.empty() && e.scan) {
+  if (!judged(nominal->profile.verdict) && !nominal->reason.empty() && e.scan) {
     row.measured = concat(row.measured, " (", nominal->reason, ")");
   }
   return row;

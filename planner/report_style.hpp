@@ -30,6 +30,8 @@ td.verdict-cell { font-weight: bold; white-space: nowrap; }
 .v-fail { background: #f9cfd1; color: #a00d18; }
 .v-undecided { background: #ffe3a8; color: #7a4a00; }
 .v-not-measured { background: #e4e4e4; color: #555; }
+.v-incomplete { background: #d9d2f0; color: #3d2a86; }
+.v-excluded { background: #f4f4f4; color: #777; font-style: italic; }
 .v-none { background: #eef1f5; color: #3b4756; }
 img.map { width: 100%; height: auto; border: 1px solid #ccc; display: block; }
 svg.legend, svg.histogram { width: 100%; height: auto; display: block; }

@@ -36,7 +36,9 @@ const char* verdict_label(Verdict verdict) {
     case Verdict::pass: return "pass";
     case Verdict::fail: return "fail";
     case Verdict::undecided: return "undecided";
+    case Verdict::incomplete: return "incomplete";
     case Verdict::not_measured: return "not measured";
+    case Verdict::excluded: return "excluded";
   }
   return "?";
 }
@@ -46,7 +48,9 @@ const char* verdict_class(Verdict verdict) {
     case Verdict::pass: return "v-pass";
     case Verdict::fail: return "v-fail";
     case Verdict::undecided: return "v-undecided";
+    case Verdict::incomplete: return "v-incomplete";
     case Verdict::not_measured: return "v-not-measured";
+    case Verdict::excluded: return "v-excluded";
   }
   return "v-none";
 }

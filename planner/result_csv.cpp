@@ -47,10 +47,16 @@ class Row {
 
 // The inspection's cells of one characteristic: deviation, U, limits, verdict (all empty without a nominal).
 void characteristic(Row& row, const Characteristic* c) {
-  const bool measured = c && c->verdict != Verdict::not_measured;
+  const bool measured = c && judged(c->verdict);
   row.text(measured ? fixed(c->deviation_mm, kDecimals) : "").text(measured ? fixed(c->uncertainty_mm, kDecimals) : "");
   row.text(c ? fixed(c->zone.lower_mm, kDecimals) : "").text(c ? fixed(c->zone.upper_mm, kDecimals) : "");
   row.text(c ? to_string(c->verdict) : "");
+}
+
+// The row's reason: why the request left the feature out when it did (that says more than the
+// plan's reason, which it quotes), else the feature's own.
+const std::string& reason_of(const std::string& feature_reason, Verdict verdict, const std::string& inspection_reason) {
+  return verdict == Verdict::excluded ? inspection_reason : feature_reason;
 }
 
 std::string header(std::initializer_list<const char*> names) {
@@ -73,8 +79,9 @@ std::string to_csv(const MeasurementResult& result) {
     row.text(std::to_string(e.id)).text(geometry::to_string(e.kind)).text(to_string(e.method)).text(to_string(e.status));
     row.vector(measured ? &e.scan->position : nullptr).vector(measured ? &e.machine->position : nullptr);
     row.value(e.deviation.signed_mm).value(measured ? e.scan->sigma_mm : 0);
-    characteristic(row, inspection && i < inspection->edges.size() ? &inspection->edges[i].profile : nullptr);
-    row.text(quoted(e.reason));
+    const EdgeInspection* nominal = inspection && i < inspection->edges.size() ? &inspection->edges[i] : nullptr;
+    characteristic(row, nominal ? &nominal->profile : nullptr);
+    row.text(quoted(nominal ? reason_of(e.reason, nominal->profile.verdict, nominal->reason) : e.reason));
     out += row.line();
   }
   return out;
@@ -101,8 +108,9 @@ std::string holes_to_csv(const MeasurementResult& result) {
     const HoleInspection* hole = inspection && i < inspection->holes.size() ? &inspection->holes[i] : nullptr;
     characteristic(row, hole ? &hole->diameter : nullptr);
     characteristic(row, hole ? &hole->position : nullptr);
-    row.text(hole ? to_string(worse(hole->diameter.verdict, hole->position.verdict)) : "");
-    row.text(quoted(h.reason));
+    const Verdict verdict = hole ? worse(hole->diameter.verdict, hole->position.verdict) : Verdict::not_measured;
+    row.text(hole ? to_string(verdict) : "");
+    row.text(quoted(hole ? reason_of(h.reason, verdict, hole->reason) : h.reason));
     out += row.line();
   }
   return out;

@@ -140,6 +140,7 @@ ClearanceCheck StylusClearance::check(const Touch& t) const {
       case MotionKind::descend: c = check_descent(m); break;
       case MotionKind::probe: c = check_search(t, m); break;
       case MotionKind::return_to_start: c = check_in_box(m.to, "the approach start"); break;  // on the searched line
+      case MotionKind::change_tip: break;  // never part of a touch's own motions
     }
     if (!c.ok) return c;
   }

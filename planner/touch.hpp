@@ -43,6 +43,7 @@ struct Touch {
   // the real part allows.
   double min_travel_mm = 0;
   double retract_mm = 0;              // back along −direction after the contact, by the probe itself
+  std::string tip;                    // the stylus tip that makes it; empty: whichever is active
 };
 
 }  // namespace cmm::planner

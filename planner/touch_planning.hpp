@@ -43,6 +43,8 @@ struct EdgePlan {
   std::vector<Touch> touches;         // ids are assigned later, in M
   std::string reason;  // why not measurable, or why faces instead of two touches
   double delta_mm = 0;  // the bound on the reference point's error its window and touches were made for
+  std::string tip;         // the tip it is planned for (empty: the active one)
+  double radius_mm = 0;    // that tip's ball radius as planned (0: compensation's default)
 };
 
 // Plans one edge point given in S; touches are placed in M through T_M_S.
@@ -55,6 +57,8 @@ struct BorePlan {
   double depth_mm = 0;  // below the entry rim, along −axis, where the wall is touched
   std::vector<Touch> touches;
   std::string reason;
+  std::string tip;         // as EdgePlan's
+  double radius_mm = 0;
 };
 
 BorePlan plan_bore(const geometry::Hole& hole, const Eigen::Isometry3d& T_M_S, const StylusClearance& clearance,

@@ -1,7 +1,9 @@
 // The touch sequence; see touch_sequence.hpp.
 #include "planner/touch_sequence.hpp"
 
+#include <algorithm>
 #include <cstdio>
+#include <stdexcept>
 
 #include "planner/motion_time.hpp"
 
@@ -48,6 +50,7 @@ const char* to_string(MotionKind kind) {
     case MotionKind::descend: return "descend";
     case MotionKind::probe: return "probe";
     case MotionKind::return_to_start: return "return";
+    case MotionKind::change_tip: return "change_tip";
   }
   return "?";
 }
@@ -83,7 +86,41 @@ std::vector<Motion> home_motions(const Vec3& from, const Vec3& home, double clea
   return out;
 }
 
+double tip_change_z(const description::MachineDescription& machine, const std::string& tip, double clearance_z) {
+  const description::StylusTip* next = machine.find_tip(tip);
+  if (next == nullptr) throw std::invalid_argument("the machine has no tip \"" + tip + "\" to change to");
+  const double z = clearance_z + std::max(0.0, machine.tip().offset.z() - next->offset.z());
+  if (z > machine.travel_box.max.z())
+    throw std::invalid_argument("a change to tip " + tip + " needs the ball at z " + std::to_string(z) +
+                                " mm, above the travel box: its stylus is too long for this clearance plane");
+  return z;
+}
+
+std::vector<Motion> tip_change_motions(const Vec3& from, const std::string& tip, double clearance_z,
+                                       const description::MachineDescription& machine) {
+  std::vector<Motion> out;
+  if (tip.empty() || tip == machine.active_tip) return out;
+  const description::StylusTip* next = machine.find_tip(tip);
+  const double change_z = tip_change_z(machine, tip, clearance_z);
+  Vec3 at = from;
+  if (at.z() < change_z) {
+    const Vec3 up(at.x(), at.y(), change_z);
+    add_move(out, MotionKind::rise, at, up, -1, machine);
+    at = up;
+  }
+  Motion change;
+  change.kind = MotionKind::change_tip;
+  change.from = at;
+  change.to = at + (next->offset - machine.tip().offset);
+  change.tip = tip;
+  change.speed_mm_s = machine.max_speed_mm_s;
+  change.time_s = tip_change_s;
+  out.push_back(change);
+  return out;
+}
+
 std::string describe(const Motion& motion) {
+  if (motion.kind == MotionKind::change_tip) return "change to tip " + motion.tip;
   char text[160];
   std::snprintf(text, sizeof text, "%s of touch %d from (%.4f, %.4f, %.4f)", to_string(motion.kind), motion.touch,
                 motion.from.x(), motion.from.y(), motion.from.z());

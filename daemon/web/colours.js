@@ -35,7 +35,9 @@ export const css = ([r, g, b]) => `rgb(${r}, ${g}, ${b})`;
 // The colours of planned points by how they are measured.
 export const METHOD_COLOURS = {two_touch: [31, 119, 180], faces: [23, 190, 207], none: [170, 170, 170]};
 export const REASON_PALETTE = [[214, 39, 40], [148, 103, 189], [140, 86, 75], [227, 119, 194], [188, 189, 34], [255, 127, 14]];
-export const VERDICT_COLOURS = {pass: STOPS[2], fail: OUTSIDE, undecided: STOPS[3], not_measured: NOT_MEASURED};
+// incomplete is a job's verdict only; a feature is pass, fail, undecided, not_measured or excluded.
+export const VERDICT_COLOURS = {pass: STOPS[2], fail: OUTSIDE, undecided: STOPS[3], incomplete: [103, 58, 183],
+                                not_measured: NOT_MEASURED, excluded: [215, 215, 215]};
 
 // An edge point's deviation for colouring: against the nominal (its `inspection`) when the result
 // has one (null for a point the nominal did not judge), else against the scan.
@@ -43,7 +45,7 @@ export function edge_deviation(point, inspected) {
   if (point.status !== 'measured') return null;
   if (inspected) {
     const n = point.inspection;
-    if (!n || n.deviation_mm === null || n.deviation_mm === undefined || n.verdict === 'not_measured') return null;
+    if (!n || n.deviation_mm === null || n.deviation_mm === undefined || n.verdict === 'not_measured' || n.verdict === 'excluded') return null;
     return {value: n.deviation_mm, colour: tolerance_colour(n.deviation_mm, n.tolerance_mm), nominal: true};
   }
   if (point.deviation_mm === null || point.deviation_mm === undefined) return null;

@@ -1,15 +1,13 @@
 // The history page: the jobs that ended (done, failed, cancelled), newest first, with their verdict
 // and counts, and each done job's report.
 import {$, el} from './ui.js';
+import {counts_text} from './verdict.js';
 
 let ctx = null;
 const FINAL = new Set(['done', 'failed', 'cancelled']);
 
 export function init(context) { ctx = context; }
 
-function counts(c) {
-  return c ? `${c.pass} pass · ${c.fail} fail · ${c.undecided} undecided · ${c.not_measured} not measured` : '';
-}
 
 // Called with every job.list the page makes (queue.js lists on each state change).
 export function render(jobs) {
@@ -24,7 +22,9 @@ export function render(jobs) {
       el('td', {}, el('span', {class: `state state-${j.state}`, text: j.state})),
       el('td', {text: j.updated || ''}),
       el('td', {}, v ? el('span', {class: `verdict verdict-${v.verdict}`, text: v.verdict}) : el('span', {class: 'hint', text: j.state === 'done' ? 'no nominal' : ''})),
-      el('td', {class: 'counts'}, v ? el('div', {text: `edges: ${counts(v.edge_points)}`}) : null, v ? el('div', {text: `holes: ${counts(v.holes)}`}) : null),
+      el('td', {class: 'counts'}, v && v.coverage ? el('div', {text: v.coverage}) : null,
+        v ? el('div', {text: `edges: ${counts_text(v.edge_points, ' · ')}`}) : null,
+        v ? el('div', {text: `holes: ${counts_text(v.holes, ' · ')}`}) : null),
       el('td', {class: 'reason', text: j.reason || ''}),
       el('td', {}, report));
   });

@@ -6,6 +6,7 @@ import {describe_error} from './rpc.js';
 import {JobView3D} from './job_view3d.js';
 import {css, relative_colour, METHOD_COLOURS, NOT_MEASURED, OUTSIDE, REASON_PALETTE, SCAN_SCALE_MM} from './colours.js';
 import {draw_histogram} from './histogram.js';
+import {counts_text, verdict_of} from './verdict.js';
 
 let ctx = null;
 let view3d = null;
@@ -135,7 +136,7 @@ function show_verdict() {
   const record = current.record;
   const view = current.view;
   const inspection = view && view.result ? view.result.inspection : null;
-  const verdict = record && record.verdict ? record.verdict : inspection ? {verdict: inspection.verdict, edge_points: inspection.counts.edge_points, holes: inspection.counts.holes} : null;
+  const verdict = verdict_of(record, inspection);
   if (!record || record.state !== 'done') {
     box.textContent = '–';
     box.className = 'verdict';
@@ -150,8 +151,9 @@ function show_verdict() {
   }
   box.textContent = verdict.verdict;
   box.className = `verdict verdict-${verdict.verdict}`;
-  const counts = (c) => (c ? `${c.pass} pass, ${c.fail} fail, ${c.undecided} undecided, ${c.not_measured} not measured` : '–');
-  $('verdict-counts').textContent = `edge points: ${counts(verdict.edge_points)}; holes: ${counts(verdict.holes)}`;
+  // What the verdict covers first: an incomplete or a pass means little without it.
+  $('verdict-counts').textContent = [verdict.coverage,
+    `edge points: ${counts_text(verdict.edge_points)}; holes: ${counts_text(verdict.holes)}`].filter(Boolean).join('. ');
 }
 
 function swatch(colour) { return el('span', {class: 'swatch', style: `background: ${css(colour)}`}); }

@@ -59,6 +59,12 @@ export class JobView3D {
     this.renderer.setPixelRatio(window.devicePixelRatio || 1);
     this.renderer.setClearColor(BACKGROUND, 1);
     container.append(this.renderer.domElement);
+    // The scale bar: the view fits any part to the canvas, so without it a part 25.4× too small
+    // (a model in inches) looks like any other.
+    this.scale_bar = document.createElement('div');
+    this.scale_bar.className = 'scale-bar';
+    this.scale_bar.innerHTML = '<span class="scale-bar-line"></span><span class="scale-bar-label"></span>';
+    container.append(this.scale_bar);
     this.scene = new THREE.Scene();
     this.camera = new THREE.PerspectiveCamera(35, 1, 0.1, 10000);
     this.camera.up.set(0, 0, 1);
@@ -106,10 +112,26 @@ export class JobView3D {
   render() {
     const start = performance.now();
     this.renderer.render(this.scene, this.camera);
+    this.update_scale_bar();
     const r = this.renderer.info.render;
     this.last_info = {points: r.points, triangles: r.triangles, calls: r.calls};
     this.last_render_at = performance.now();
     this.render_ms = this.last_render_at - start;
+  }
+
+  // A round length in mm (1, 2 or 5 × 10ⁿ) about 100 px long at the orbit target's depth, redrawn
+  // with every frame, so it stays right whatever the auto-fit, the zoom or the canvas's size do.
+  update_scale_bar() {
+    const height_px = this.renderer.getSize(new THREE.Vector2()).y;
+    const depth = this.camera.position.distanceTo(this.controls.target);
+    const px_per_mm = height_px / (2 * depth * Math.tan((this.camera.fov * Math.PI) / 360));
+    if (!(px_per_mm > 0) || !Number.isFinite(px_per_mm)) return;
+    const wanted_mm = 100 / px_per_mm;
+    const decade = Math.pow(10, Math.floor(Math.log10(wanted_mm)));
+    const mm = [5, 2, 1].map((k) => k * decade).find((v) => v <= wanted_mm);
+    this.scale_bar.dataset.mm = String(mm);
+    this.scale_bar.querySelector('.scale-bar-line').style.width = `${(mm * px_per_mm).toFixed(1)}px`;
+    this.scale_bar.querySelector('.scale-bar-label').textContent = `${Number(mm.toPrecision(3))} mm`;
   }
 
   // One frame for any number of changes: touches arrive faster than a software-rendered frame

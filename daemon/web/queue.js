@@ -130,6 +130,10 @@ export function request() {
   const scan_tolerance = number('scan-tolerance');
   if (scan_tolerance !== null) r.tolerance_mm = scan_tolerance;
   if ($('requalify').checked) r.requalify = true;
+  const tip = $('job-tip').value.trim();
+  if (tip && tip !== 'auto') r.tip = tip;
+  if ($('allow-unqualified-tip').checked) r.allow_unqualified_tip = true;
+  if ($('units-checked').checked) r.units_checked = true;
   const t = {};
   const edge = number('tol-edge');
   if (edge !== null) t.edge_profile_mm = edge;
@@ -184,7 +188,7 @@ export async function list() {
         el('td', {text: j.name || ''}),
         el('td', {}, el('span', {class: `state state-${j.state}`, text: j.state})),
         el('td', {class: 'progress', text: progress_text(j.progress)}),
-        el('td', {text: j.verdict ? j.verdict.verdict : ''}),
+        el('td', {}, j.verdict ? el('span', {class: `verdict verdict-${j.verdict.verdict}`, text: j.verdict.verdict}) : null),
         el('td', {class: 'reason', text: j.fault ? `${j.fault.kind}: ${j.reason}` : j.reason || ''}),
         el('td', {class: 'actions'},
            running ? act_button('Pause', () => job_action('job.pause', j.id), {'data-action': 'pause'}) : null,

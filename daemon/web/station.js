@@ -7,7 +7,6 @@ import {describe_error} from './rpc.js';
 let ctx = null;
 let last_status = null;
 let polling = false;
-let qualification = null;  // the tip's last qualification this page knows of
 
 const POLL_MS = 500;
 const JOG_RESEND_MS = 150;
@@ -18,18 +17,16 @@ export function init(context) {
     if (last_status) render({...last_status, ...p});
     poll_once();
   });
-  ctx.rpc.on_open((role) => {
-    if (role !== 'none') load_qualification();
+  ctx.rpc.on_open(() => {
     if (!polling) poll();
   });
   $('home').addEventListener('click', () => machine_call('machine.home', 600));
   $('reset').addEventListener('click', () => machine_call('machine.reset', 60));
   $('qualify').addEventListener('click', async () => {
-    const q = await machine_call('machine.qualify', 900);
-    if (q) {
-      qualification = q;
-      render_tip();
-    }
+    const tip = $('qualify-tip').value;
+    const q = await attempt('machine.qualify', () => ctx.rpc.call('machine.qualify', tip ? {tip} : {}, 900));
+    poll_once();
+    if (q) show_message(`tip ${q.tip} qualified: r ${fmt(q.ball_radius_mm, 4)} mm, sphere fit RMS ${fmt(q.residual_rms_mm, 4)} mm`, 'note');
   });
   $('stop').addEventListener('click', () => {
     stop_jog(false);
@@ -54,20 +51,6 @@ async function machine_call(method, timeout_s) {
   const r = await attempt(method, () => ctx.rpc.call(method, {}, timeout_s));
   poll_once();
   return r;
-}
-
-// The tip's qualification, until this page qualifies it: as the last job that finished recorded it.
-async function load_qualification() {
-  try {
-    const jobs = (await ctx.rpc.call('job.list')).jobs.filter((j) => j.state === 'done');
-    if (!jobs.length || qualification) return;
-    const result = await ctx.rpc.call('job.result', {job: jobs[jobs.length - 1].id}, 60);
-    const tip = result.traceability && result.traceability.tip;
-    if (tip && tip.qualification && !qualification) qualification = {tip: tip.id, from_job: result.job, ...tip.qualification};
-    render_tip();
-  } catch (e) {
-    // Nothing to show: the tip's line says "not known".
-  }
 }
 
 function poll() {
@@ -117,13 +100,34 @@ function render(s) {
   pill.className = `pill ${s.link !== 'up' || s.estop || s.fault ? 'bad' : s.homed ? 'good' : 'warn'}`;
 }
 
+// Every tip as the machine reports it, and whether and when it was qualified: a job makes no touch
+// with a tip that is not (unless its request allows it).
 function render_tip() {
-  const tip = last_status ? last_status.tip : null;
-  $('m-tip').textContent = tip || '–';
-  const q = qualification && (!tip || qualification.tip === tip) ? qualification : null;
-  $('m-qualification').textContent = q
-    ? `r ${fmt(q.ball_radius_mm, 4)} mm, residual RMS ${fmt(q.residual_rms_mm, 4)} mm, ${q.time_utc}${q.from_job ? ` (as job ${q.from_job} recorded it)` : ''}`
-    : 'not known to this page (Qualify measures it)';
+  const tips = last_status && Array.isArray(last_status.tips) ? last_status.tips : [];
+  $('m-tip').textContent = (last_status && last_status.tip) || '–';
+  const table = $('m-tips');
+  table.replaceChildren();
+  for (const t of tips) {
+    const row = table.insertRow();
+    const th = document.createElement('th');
+    th.textContent = `${t.id}${t.active ? ' (active)' : ''}`;
+    row.appendChild(th);
+    const td = row.insertCell();
+    td.dataset.tip = t.id;
+    td.textContent = t.qualification
+      ? `r ${fmt(t.ball_radius_mm, 4)} mm, qualified ${t.qualification.time_utc} (sphere fit RMS ${fmt(t.qualification.residual_rms_mm, 4)} mm)`
+      : `not qualified: nominal r ${fmt(t.ball_radius_mm, 4)} mm`;
+    td.className = t.qualification ? 'good' : 'warn';
+  }
+  const select = $('qualify-tip');
+  const ids = tips.map((t) => t.id).join(',');
+  if (select.dataset.ids !== ids) {
+    const chosen = select.value;
+    select.replaceChildren(...tips.map((t) => new Option(t.id, t.id)));
+    select.dataset.ids = ids;
+    const active = tips.find((t) => t.active);
+    select.value = ids.split(',').includes(chosen) ? chosen : active ? active.id : '';
+  }
 }
 
 // --- jogging: a continuous jog is renewed every 150 ms while its button is held, and stopped on release.

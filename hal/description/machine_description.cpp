@@ -98,6 +98,7 @@ MachineDescription machine_from_json(const nlohmann::json& j, const std::string&
     if (f.value()["active_tip"].is_string() && !m.tips.empty() && !m.find_tip(m.active_tip))
       f.problem("active_tip", "\"" + m.active_tip + "\" is not among the tips");
   }
+  m.tool_changer = f.flag("tool_changer", m.tool_changer);
   if (f.has("reference_sphere")) {
     JsonFields sphere = f.object("reference_sphere");
     if (sphere.require("centre")) m.reference_sphere.centre = sphere.vec3("centre", m.reference_sphere.centre);
@@ -131,6 +132,7 @@ nlohmann::json to_json(const MachineDescription& m) {
       {"clearance_z", m.clearance_z},
       {"tips", tips},
       {"active_tip", m.active_tip},
+      {"tool_changer", m.tool_changer},
       {"reference_sphere", {{"centre", vec3_json(m.reference_sphere.centre)}, {"radius_mm", m.reference_sphere.radius_mm}}}};
   if (!m.name.empty()) j["name"] = m.name;
   return j;

@@ -59,6 +59,9 @@ struct MachineDescription {
   double clearance_z = 0;          // every travel between touches runs at this height, M
   std::vector<StylusTip> tips;
   std::string active_tip;
+  // Whether select_tip changes the stylus by itself (an automatic tool changer), or only tells the
+  // controller which stylus the operator has fitted by hand (a job then pauses for the change).
+  bool tool_changer = true;
   ReferenceSphere reference_sphere;
 
   const StylusTip* find_tip(const std::string& id) const;  // null when there is none

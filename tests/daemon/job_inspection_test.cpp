@@ -96,7 +96,7 @@ TEST_F(JobInspection, ANominalInTheReferencesFrameIsUsedAsGiven) {
   ASSERT_TRUE(inspection);
   EXPECT_EQ(inspection->nominal.method, "given");
   EXPECT_TRUE(inspection->nominal.T_S_N.isApprox(Eigen::Isometry3d::Identity()));
-  EXPECT_EQ(inspection->verdict, planner::Verdict::not_measured) << "no feature was measured";
+  EXPECT_EQ(inspection->verdict, planner::Verdict::incomplete) << "no feature was measured: no pass by omission";
 }
 
 TEST_F(JobInspection, AFarNominalIsFittedOntoTheReferenceWhenAskedTo) {

@@ -1,5 +1,6 @@
-// job.submit's and plan.preview's params: the raw-scan fields (tolerance_mm, bin_size_mm, adaptive)
-// read with the one field checker, each bad one refused with its JSON Pointer.
+// job.submit's and plan.preview's params: the raw-scan fields (tolerance_mm, bin_size_mm, adaptive), the
+// tips (tip, allow_unqualified_tip) and what to inspect (inspect) read with the one field checker, each
+// bad one refused with its JSON Pointer.
 #include "daemon/job_request.hpp"
 
 #include <gmock/gmock.h>
@@ -61,6 +62,73 @@ TEST(JobRequestScan, EachBadFieldIsRefusedAtItsPointer) {
     SCOPED_TRACE(c.patch.dump());
     try {
       parse_job_request(preview(c.patch), config(), true);
+      ADD_FAILURE() << "no error";
+    } catch (const RpcError& e) {
+      EXPECT_EQ(e.code(), rpc_code::invalid_params);
+      EXPECT_EQ(e.data().value("path", ""), c.path);
+      EXPECT_THAT(e.what(), HasSubstr(c.message));
+    }
+  }
+}
+
+TEST(JobRequestTips, AutoAndNoUnqualifiedTipUnlessSaid) {
+  const JobRequest plain = parse_job_request(preview(json::object()), config(), true);
+  EXPECT_EQ(plain.tip, "auto");
+  EXPECT_FALSE(plain.allow_unqualified_tip);
+  const JobRequest named = parse_job_request(preview({{"tip", "T2"}, {"allow_unqualified_tip", true}}), config(), true);
+  EXPECT_EQ(named.tip, "T2");
+  EXPECT_TRUE(named.allow_unqualified_tip);
+  for (const json& patch : {json{{"tip", "T9"}}, json{{"tip", 2}}, json{{"allow_unqualified_tip", "yes"}}}) {
+    SCOPED_TRACE(patch.dump());
+    try {
+      parse_job_request(preview(patch), config(), true);
+      ADD_FAILURE() << "no error";
+    } catch (const RpcError& e) {
+      EXPECT_EQ(e.code(), rpc_code::invalid_params);
+      EXPECT_EQ(e.data().value("path", ""), "/" + patch.begin().key());
+    }
+  }
+}
+
+TEST(JobRequestInspect, LeftOutEveryFeatureIsAskedFor) {
+  EXPECT_TRUE(parse_job_request(preview(json::object()), config(), true).inspect.everything());
+}
+
+TEST(JobRequestInspect, ChosenFeaturesAndExclusionsAreRead) {
+  const JobRequest r = parse_job_request(
+      preview({{"inspect", {{"edge_points", {1, 2}},
+                            {"holes", "all"},
+                            {"exclude", {{"not_probeable", true}, {"holes", {3}}, {"reason", "a dowel pin sits in it"}}}}}}),
+      config(), true);
+  EXPECT_EQ(r.inspect.edge_points, (std::set<int>{1, 2}));
+  EXPECT_FALSE(r.inspect.holes.has_value());
+  EXPECT_TRUE(r.inspect.exclude_not_probeable);
+  EXPECT_EQ(r.inspect.excluded_holes, std::set<int>{3});
+  EXPECT_EQ(r.inspect.exclude_reason, "a dowel pin sits in it");
+}
+
+TEST(JobRequestInspect, EachBadFieldIsRefusedAtItsPointer) {
+  struct Case {
+    json inspect;
+    std::string path, message;
+  };
+  const std::vector<Case> cases = {
+      {"all", "/inspect", "must be an object"},
+      {{{"edge_points", "most"}}, "/inspect/edge_points", "must be one of"},
+      {{{"edge_points", 3}}, "/inspect/edge_points", "must be \"all\", \"none\" or an array of feature ids"},
+      {{{"holes", {0, -1}}}, "/inspect/holes/1", "must be"},
+      {{{"curves", "all"}}, "/inspect/curves", "must be an array of feature ids"},
+      {{{"holes", {2, 2}}}, "/inspect/holes/1", "names feature 2 twice"},
+      {{{"exclude", {{"edge_points", {4}}}}}, "/inspect/exclude/reason", "must say why"},
+      {{{"exclude", {{"reason", "clamped"}}}}, "/inspect/exclude/reason", "names no feature"},
+      {{{"exclude", {{"not_probeable", "yes"}}}}, "/inspect/exclude/not_probeable", "must be true or false"},
+      {{{"exclude", {{"unreachable", true}}}}, "/inspect/exclude/unreachable", "unknown"},
+      {{{"edges", "all"}}, "/inspect/edges", "unknown"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.inspect.dump());
+    try {
+      parse_job_request(preview({{"inspect", c.inspect}}), config(), true);
       ADD_FAILURE() << "no error";
     } catch (const RpcError& e) {
       EXPECT_EQ(e.code(), rpc_code::invalid_params);

@@ -79,6 +79,16 @@ class JobRunnerTest : public ::testing::Test {
     recorder_ = recorder.get();
     link_ = std::make_unique<MachineLink>(std::move(recorder), config_->machine, "sim",
                                           config_->state_dir / "touch_in_progress.json");
+    // The tips as machine.qualify leaves them (the simulator's true tips are its nominal ones here).
+    link_->bring_up();
+    for (const std::string& tip : qualified_) {
+      description::TipQualification q;
+      q.ball_radius_mm = link_->cmm().info().find_tip(tip)->ball_radius_mm;
+      q.offset = link_->cmm().info().find_tip(tip)->offset;
+      q.touches = 9;
+      q.time_utc = "2026-12-01T07:00:00Z";
+      link_->cmm().record_qualification(tip, q);
+    }
     models_ = std::make_unique<ModelStore>(config_->state_dir / "models", config_->models_dir);
     store_ = std::make_unique<JobStore>(jobs_dir.empty() ? config_->state_dir / "jobs" : jobs_dir);
     json params = {{"model", "file:part.ply"}, {"spacing_mm", 10}, {"registration", given_corners(block)}};
@@ -149,7 +159,15 @@ class JobRunnerTest : public ::testing::Test {
   std::vector<int> touched_;
   int contacts_ = 0;
   std::function<void(int touches_made)> after_touch_;
+  std::vector<std::string> qualified_{"T1"};  // the tips qualified before the job
 };
+
+// The sample machine without a tool changer (a Grbl machine's kind): the operator fits each tip.
+json without_tool_changer() {
+  json machine = description::to_json(description::default_machine());
+  machine["tool_changer"] = false;
+  return {{"machine", machine}};
+}
 
 // --- done
 
@@ -387,17 +405,16 @@ TEST_F(JobRunnerTest, PausedWhenTheJournalCannotBeWrittenKeepsTheTouch) {
   EXPECT_EQ(probes(), planned_touches()) << "the kept touch was made again";
 }
 
-TEST_F(JobRunnerTest, PausedWhenTheTipIsNotTheRegisteredOne) {
+TEST_F(JobRunnerTest, ATipChangedDuringAHoldIsChangedBackAndAChangedQualificationHolds) {
   start();
   after_touch_ = [this](int made) {
     if (made == 4) control_.pause = true;
   };
   EXPECT_EQ(run(), JobState::paused);
   after_touch_ = nullptr;
-  link_->cmm().select_tip("T2");  // someone changed the tip during the hold
-  EXPECT_EQ(run(), JobState::paused);
-  EXPECT_THAT(reason_, HasSubstr("registered with tip T1 but the machine's active tip is T2"));
-  link_->cmm().select_tip("T1");
+  // Someone changed the tip during the hold, clear of the part (T2's ball sits 20 mm below T1's).
+  link_->cmm().move({ball() + hal::Vec3(0, 0, 100), 0});
+  link_->cmm().select_tip("T2");
   // A qualification the machine now reports that the job's touches were not made under.
   description::TipQualification q;
   q.ball_radius_mm = 0.9991;
@@ -408,6 +425,106 @@ TEST_F(JobRunnerTest, PausedWhenTheTipIsNotTheRegisteredOne) {
   EXPECT_EQ(fault_->kind, "Qualification");
   EXPECT_THAT(reason_, HasSubstr("tip T1's qualification changed"));
   EXPECT_EQ(journal().size(), 4u);
+  EXPECT_EQ(link_->cmm().info().active_tip, "T1") << "the job measures with T1 and changed back to it";
+  const Recovery recovered = recover_journal(store_->path(id_, JobFile::touches));
+  ASSERT_EQ(recovered.tip_changes.size(), 1u);
+  EXPECT_EQ(recovered.tip_changes[0].tip, "T1");
+}
+
+// --- tips
+
+TEST_F(JobRunnerTest, AnUnqualifiedTipHoldsTheJobBeforeAnyMotion) {
+  qualified_.clear();  // a controller that restarted after the operator qualified
+  start();
+  EXPECT_EQ(run(), JobState::paused);
+  ASSERT_TRUE(fault_);
+  EXPECT_EQ(fault_->kind, "Qualification");
+  EXPECT_THAT(reason_, HasSubstr("tip T1 is not qualified"));
+  EXPECT_THAT(reason_, HasSubstr("allow_unqualified_tip"));
+  for (const RecordedCommand& c : recorder_->commands) EXPECT_NE(c.kind, RecordedCommand::Kind::probe) << "a touch was made";
+  EXPECT_TRUE(journal().empty());
+  // The operator qualifies it during the hold: the job goes on with it.
+  description::TipQualification q;
+  q.ball_radius_mm = 1.0;
+  q.time_utc = "2026-12-01T08:00:00Z";
+  link_->cmm().record_qualification("T1", q);
+  EXPECT_EQ(run(), JobState::done) << reason_;
+  EXPECT_EQ(file(JobFile::qualifications)["qualifications"][0]["qualification"]["time_utc"], "2026-12-01T08:00:00Z");
+}
+
+TEST_F(JobRunnerTest, AnUnqualifiedTipMeasuresOnlyWhenTheRequestAllowsItAndTheResultSaysSo) {
+  qualified_.clear();
+  start({{"allow_unqualified_tip", true}, {"tip", "T1"}});
+  ASSERT_EQ(run(), JobState::done) << reason_;
+  const json result = file(JobFile::result);
+  bool said = false;
+  for (const json& note : result.at("notes")) said = said || note.get<std::string>().find("nominal tip, not qualified: tip T1") == 0;
+  EXPECT_TRUE(said) << result.at("notes").dump(1);
+  EXPECT_TRUE(result["traceability"]["tip"]["qualification"].is_null());
+  // The report and the QIF say it too.
+  const std::string report = *store_->read(id_, JobFile::report), qif = *store_->read(id_, JobFile::result_qif);
+  EXPECT_NE(report.find("nominal tip, not qualified: tip T1"), std::string::npos);
+  EXPECT_NE(qif.find("<Name>tip T1 (nominal tip, not qualified)</Name>"), std::string::npos);
+}
+
+TEST_F(JobRunnerTest, RequalifyQualifiesAnUnqualifiedTipBeforeItsFirstTouch) {
+  qualified_.clear();
+  start({{"requalify", true}});
+  ASSERT_EQ(run(), JobState::done) << reason_;
+  const json q = file(JobFile::qualifications)["qualifications"][0];
+  EXPECT_EQ(q.at("source"), "qualified by the job (requalify)");
+  EXPECT_TRUE(q.at("qualification").is_object());
+}
+
+TEST_F(JobRunnerTest, AutoMeasuresTheBoresWithTheLargerQualifiedTipAndSaysWhichTipMadeEachTouch) {
+  qualified_ = {"T1", "T2"};
+  start();
+  ASSERT_EQ(run(), JobState::done) << reason_;
+  const json result = file(JobFile::result);
+  int bores = 0;
+  for (const json& h : result.at("holes")) {
+    if (h.at("status") != "measured") continue;
+    EXPECT_EQ(h.at("tip"), "T2") << h.dump();
+    ++bores;
+  }
+  EXPECT_GT(bores, 0);
+  for (const json& e : result.at("edge_points"))
+    if (e.at("status") == "measured" && e.at("tip") != "T1") {
+      EXPECT_EQ(e.at("tip"), "T2");
+    }
+  std::set<std::string> tips;
+  for (const json& t : result.at("touch_tips")) tips.insert(t.at("tip").get<std::string>());
+  EXPECT_EQ(tips, (std::set<std::string>{"T1", "T2"}));
+  // One change to T2 in the program, and the same in the journal.
+  int changes = 0;
+  const json plan = file(JobFile::plan);
+  for (const json& m : plan.at("motions")) changes += m.at("kind") == "change_tip";
+  EXPECT_EQ(changes, 1);
+  EXPECT_EQ(recover_journal(store_->path(id_, JobFile::touches)).tip_changes.size(), 1u);
+  expect_every_touch_once();
+}
+
+TEST_F(JobRunnerTest, AMachineWithoutAToolChangerPausesForTheOperatorToFitTheTipAndItsQualification) {
+  qualified_ = {"T1", "T2"};
+  start(json::object(), without_tool_changer());
+  EXPECT_EQ(run(), JobState::paused);
+  ASSERT_TRUE(fault_);
+  EXPECT_EQ(fault_->kind, "TipChange");
+  EXPECT_THAT(reason_, HasSubstr("fit tip T2"));
+  const std::size_t made = journal().size();
+  EXPECT_GT(made, 0u);
+  // Resumed without qualifying the fitted tip: it holds for the qualification.
+  EXPECT_EQ(run(), JobState::paused);
+  EXPECT_EQ(fault_->kind, "Qualification");
+  EXPECT_THAT(reason_, HasSubstr("tip T2 was fitted by hand"));
+  EXPECT_EQ(journal().size(), made);
+  description::TipQualification q;
+  q.ball_radius_mm = 2.5;
+  q.offset = link_->cmm().info().find_tip("T2")->offset;
+  q.time_utc = "2099-01-01T00:00:00Z";  // made after the change was asked for
+  link_->cmm().record_qualification("T2", q);
+  EXPECT_EQ(run(), JobState::done) << reason_;
+  expect_every_touch_once();
 }
 
 // --- interrupted

@@ -12,6 +12,26 @@ bool has_line(const std::string& text, const std::string& line) {
   return text.find("\n" + line + "\n") != std::string::npos || text.rfind(line + "\n", 0) == 0;
 }
 
+// Done jobs by their verdict: the four values always listed, anything else "other" (a record cannot
+// grow the label set), a job without a nominal (verdict null) not at all.
+TEST(Metrics, CountsDoneJobsByVerdict) {
+  Metrics m({});
+  const auto done = [&](int job, nlohmann::json verdict) {
+    m.observe("job.state", {{"job", job}, {"state", "done"}, {"verdict", std::move(verdict)}});
+  };
+  done(1, {{"verdict", "incomplete"}, {"coverage", "…"}});
+  done(2, {{"verdict", "incomplete"}});
+  done(3, {{"verdict", "pass"}});
+  done(4, nullptr);
+  done(5, {{"verdict", "brilliant"}});
+  const std::string text = m.text({});
+  EXPECT_TRUE(has_line(text, "cmmd_job_verdicts_total{verdict=\"incomplete\"} 2")) << text;
+  EXPECT_TRUE(has_line(text, "cmmd_job_verdicts_total{verdict=\"pass\"} 1")) << text;
+  EXPECT_TRUE(has_line(text, "cmmd_job_verdicts_total{verdict=\"fail\"} 0")) << text;
+  EXPECT_TRUE(has_line(text, "cmmd_job_verdicts_total{verdict=\"undecided\"} 0")) << text;
+  EXPECT_TRUE(has_line(text, "cmmd_job_verdicts_total{verdict=\"other\"} 1")) << text;
+}
+
 TEST(Metrics, CountsAJobsTouchesStatesAndDurations) {
   Metrics m({"job.submit", "job.get"});
   const Metrics::Clock::time_point t0{};

@@ -51,6 +51,11 @@ TEST(Cmmctl, StatusSubmitWatchJobsAndResultAgainstARunningCmmd) {
 
   const auto scan = testing::sample_scan(dir / "scan");
   const auto corners = given_corners(dir / "scan");
+  r = cmm::test::run_command(ctl + " qualify");  // no touch on an unqualified tip
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = cmm::test::run_command(ctl + " status");
+  EXPECT_NE(r.output.find("tip      T1 (active) r "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("tip      T2 r 2.5000 mm, NOT QUALIFIED"), std::string::npos) << r.output;
   r = cmm::test::run_command(ctl + " submit " + scan.string() + " --corners " + corners.string() +
                              " --spacing 8 --name plate-check --watch");
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -91,6 +96,7 @@ TEST(Cmmctl, ARawScanIsMeshedByCmmdAndMeasured) {
                                   " --spacing 0.8 --noise 0.05 --cloud " + (dir / "scan" / "raw.pcd").string() +
                                   " --plate-corners " + (dir / "scan" / "plate_corners.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_EQ(cmm::test::run_command(ctl + " qualify").exit_code, 0);
   r = cmm::test::run_command(ctl + " submit " + (dir / "scan" / "raw.pcd").string() + " --tolerance 0.1 --spacing 8 --measure-plate " +
                              (dir / "scan" / "plate_corners.json").string() + " --watch");
   ASSERT_EQ(r.exit_code, 0) << r.output;

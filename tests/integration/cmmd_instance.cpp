@@ -96,6 +96,9 @@ std::filesystem::path CmmdInstance::job_folder(int id) const {
 
 int submit_job(daemon::RpcClient& client, const std::filesystem::path& model, const nlohmann::json& request) {
   nlohmann::json params = request;
+  // No touch is made on an unqualified tip (docs/api.md): a job that does not say how to treat its
+  // tips qualifies them itself, as a test rig that is not about qualification would be set up.
+  if (!params.contains("requalify") && !params.contains("allow_unqualified_tip")) params["requalify"] = true;
   params["model"] = daemon::upload_model(client, model, 256 * 1024);
   return client.call("job.submit", params, 120).at("id").get<int>();
 }

@@ -109,7 +109,7 @@ struct RestartedController {
     // The qualification finds the true offset, 20 µm off the nominal.
     EXPECT_LT((vec(first.at("offset")) - vec(offset_error)).norm(), 0.002) << first.dump();
     json request = {{"registration", testing::sample_measure_plate(dir.path / "scan")}, {"seed", 1}, {"spacing_mm", 10}};
-    if (requalify) request["requalify"] = true;
+    request["requalify"] = requalify;
     id = testing::submit_job(*client, scan, request);
     folder = cmmd.job_folder(id);
     total = await_job(*watch, id, "probing", testing::job_progress_at_least(id, "probing", 0))["params"]["total"];
@@ -172,7 +172,7 @@ TEST(CmmdQualification, AJobWhoseTipLostItsQualificationPausesForItAndFinishesOn
   c.client->call("job.resume", {{"job", c.id}});
   await_job(*c.watch, c.id, "the pause for the qualification", testing::job_state_is(c.id, "paused"));
   const json held = c.client->call("job.get", {{"job", c.id}});
-  EXPECT_EQ(held.at("reason"), "tip T1's qualification vanished since the job began: machine.qualify, then job.resume")
+  EXPECT_EQ(held.at("reason").get<std::string>().rfind("tip T1's qualification vanished since the job began: qualify it", 0), 0u)
       << held.dump();
   EXPECT_EQ(held.at("fault").value("kind", ""), "Qualification") << held.dump();
   EXPECT_EQ(testing::journal_touch_ids(c.folder).size(), c.before) << "a touch was made with the tip unqualified";
@@ -224,7 +224,9 @@ TEST(CmmdQualification, RequalifyIsTrueOrFalseAndKeptWithTheRequest) {
   const int id = testing::submit_job(client, scan, good);
   client.call("job.cancel", {{"job", id}});
   EXPECT_EQ(testing::read_json_file(cmmd.job_folder(id) / "request.json").at("requalify"), true);
-  const int plain = testing::submit_job(client, scan, request);
+  json unsaid = request;
+  unsaid["allow_unqualified_tip"] = false;  // the helper would otherwise ask for requalify
+  const int plain = testing::submit_job(client, scan, unsaid);
   client.call("job.cancel", {{"job", plain}});
   EXPECT_EQ(testing::read_json_file(cmmd.job_folder(plain) / "request.json").at("requalify"), false) << "the default is not stored";
   EXPECT_EQ(cmmd.terminate(), 0);

@@ -189,6 +189,13 @@ def main():
         # --- Home, a jog held on +X and released, and the position taken as plate corner 2.
         operator.find_element(By.ID, 'home').click()
         wait(operator, 60, 'the machine homed', lambda d: text(d, '#m-homed') == 'yes' and text(d, '#m-moving') == 'no')
+        # --- Qualify: the page lists each tip and whether it is qualified (no job touches with one that is not).
+        wait(operator, 20, 'the tips listed', lambda d: 'not qualified' in text(d, '#m-tips td[data-tip="T1"]'))
+        operator.find_element(By.ID, 'qualify').click()
+        wait(operator, 120, 'T1 qualified', lambda d: 'qualified 20' in text(d, '#m-tips td[data-tip="T1"]'))
+        assert 'not qualified' in text(operator, '#m-tips td[data-tip="T2"]'), text(operator, '#m-tips')
+        wait(operator, 60, 'the machine still', lambda d: text(d, '#m-moving') == 'no')
+        clock.mark('T1 qualified through the page')
         x0 = float(text(operator, '#m-x'))
         jog = operator.find_element(By.CSS_SELECTOR, '[data-jog="-x"]')
         ActionChains(operator).click_and_hold(jog).perform()
@@ -276,12 +283,22 @@ def main():
         clock.mark('resumed')
         wait(operator, 240, 'the job to be done', lambda d: text(d, '#job-state') == 'done')
         clock.mark('done')
-        wait(operator, 30, 'the verdict', lambda d: text(d, '#verdict') in ('PASS', 'FAIL', 'UNDECIDED', 'NOT_MEASURED'))
+        wait(operator, 30, 'the verdict', lambda d: text(d, '#verdict') in ('PASS', 'FAIL', 'UNDECIDED', 'INCOMPLETE'))
+        # Whatever the verdict, what it covers is next to it.
+        assert 'inspected edge points measured' in text(operator, '#verdict-counts'), text(operator, '#verdict-counts')
         wait(operator, 10, 'the deviation legend',
              lambda d: d.find_element(By.ID, 'legend').get_attribute('data-kind') == 'deviation')
         assert 'Deviation from the nominal' in text(operator, '#legend'), text(operator, '#legend')
         stats = wait(operator, 10, 'the measured points',
                      lambda d: view_stats(d)['measured'] > 0 and view_stats(d))
+        # The scale bar in mm: about a part's size, not 25 times less (issue 34: the view fits any
+        # part to the canvas, a model in inches looked normal); the bar's length is its mm at the view's scale.
+        bar = operator.find_element(By.CSS_SELECTOR, '#view3d .scale-bar')
+        bar_mm = float(bar.get_attribute('data-mm'))
+        assert 5 <= bar_mm <= 100, f'the scale bar says {bar_mm} mm for the 88 x 95 x 41 mm block'
+        assert text(operator, '#view3d .scale-bar-label') == f'{bar_mm:g} mm', text(operator, '#view3d .scale-bar-label')
+        bar_px = operator.find_element(By.CSS_SELECTOR, '#view3d .scale-bar-line').size['width']
+        assert 40 <= bar_px <= 200, f'the scale bar is {bar_px} px long'
         assert text(operator, '#touch-count') == text(operator, '#touch-total'), \
             f'{text(operator, "#touch-count")} of {text(operator, "#touch-total")} touches shown'
         # Near the centre: a point near the canvas's top could scroll under the fixed header.

@@ -29,7 +29,6 @@ TEST(DecisionRule, PassFailUndecidedAtTheLimits) {
   EXPECT_EQ(decide(0.0, 0.2, zone), Verdict::undecided);  // an uncertainty wider than the zone proves nothing
   EXPECT_EQ(decide(std::nan(""), 0.01, zone), Verdict::undecided);
   EXPECT_EQ(worse(Verdict::pass, Verdict::fail), Verdict::fail);
-  EXPECT_EQ(worse(Verdict::not_measured, Verdict::undecided), Verdict::undecided);
 }
 
 TEST(Tolerances, PointOverridesCurveOverridesDefault) {
@@ -201,7 +200,111 @@ TEST(Inspect, AFarPointHasNoNominalEdgeAndIsNotJudged) {
   const InspectionResult r = inspect(s.result, {}, nominal, s.tolerances, {});
   EXPECT_EQ(r.edges[0].profile.verdict, Verdict::not_measured);
   EXPECT_NE(r.edges[0].reason.find("no sharp edge of the nominal within"), std::string::npos);
-  EXPECT_EQ(r.verdict, Verdict::not_measured);
+  EXPECT_EQ(r.verdict, Verdict::incomplete) << "nothing judged is no pass";
+}
+
+// The passing scenario with one edge point's touch missed: the job was asked for it and has no
+// measurement, so it is incomplete, not pass; the same job with that point left out on purpose passes,
+// and counts it apart with its reason. Everywhere the verdict is written says the same.
+TEST(Inspect, AnUnmeasuredFeatureMakesTheJobIncompleteUnlessLeftOutOnPurpose) {
+  PlateScenario s;
+  const NominalModel nominal = nominal_model(s.part.mesh, Eigen::Isometry3d::Identity(), 30);
+  s.result.edges.erase(s.result.edges.begin() + 2, s.result.edges.begin() + 5);  // keep 0, 1 (pass) and 5 (missed)
+  s.result.inspection = inspect(s.result, {}, nominal, s.tolerances, {});
+  const InspectionResult& asked = *s.result.inspection;
+  EXPECT_EQ(asked.verdict, Verdict::incomplete);
+  EXPECT_EQ(asked.edge_counts.pass, 2);
+  EXPECT_EQ(asked.edge_counts.not_measured, 1);
+  EXPECT_EQ(asked.edge_counts.excluded, 0);
+  EXPECT_EQ(coverage_text(asked), "2 of 3 inspected edge points measured (1 not measured), 1 of 1 inspected holes measured");
+  nlohmann::json j = to_json(s.result);
+  EXPECT_EQ(j["inspection"]["verdict"], "incomplete");
+  EXPECT_EQ(j["inspection"]["counts"]["edge_points"]["not_measured"], 1);
+  EXPECT_EQ(j["edge_points"][2]["inspection"]["verdict"], "not_measured");
+
+  InspectionScope scope;
+  scope.excluded_edge_points = {5};
+  scope.exclude_reason = "under the clamp";
+  s.result.inspection = inspect(s.result, {}, nominal, s.tolerances, {}, scope);
+  const InspectionResult& left_out = *s.result.inspection;
+  EXPECT_EQ(left_out.verdict, Verdict::pass);
+  EXPECT_EQ(left_out.edge_counts.not_measured, 0);
+  EXPECT_EQ(left_out.edge_counts.excluded, 1);
+  EXPECT_EQ(left_out.edges[2].profile.verdict, Verdict::excluded);
+  EXPECT_EQ(left_out.edges[2].reason, "under the clamp");
+  ASSERT_EQ(left_out.exclusions.size(), 1u);
+  EXPECT_EQ(left_out.exclusions[0].edge_points, 1);
+  EXPECT_EQ(coverage_text(left_out),
+            "2 of 2 inspected edge points measured, 1 of 1 inspected holes measured; 1 edge point excluded (under the clamp)");
+  j = to_json(s.result);
+  EXPECT_EQ(j["inspection"]["verdict"], "pass");
+  EXPECT_EQ(j["inspection"]["counts"]["edge_points"]["not_measured"], 0) << "a pass carries no not_measured";
+  EXPECT_EQ(j["inspection"]["counts"]["edge_points"]["excluded"], 1);
+  EXPECT_EQ(j["inspection"]["exclusions"][0]["reason"], "under the clamp");
+  EXPECT_EQ(j["inspection"]["inspect"]["exclude"]["edge_points"], nlohmann::json::array({5}));
+  EXPECT_EQ(j["edge_points"][2]["inspection"]["verdict"], "excluded");
+  EXPECT_TRUE(j["edge_points"][2]["inspection"]["deviation_mm"].is_null());
+  EXPECT_NE(to_csv(s.result).find(",excluded,"), std::string::npos);
+}
+
+// "not_probeable" leaves out what the plan could not measure in this set-up, with the plan's reason;
+// a feature the plan measured and whose touch then failed stays asked for.
+TEST(Inspect, NotProbeableFeaturesAreExcludedWithThePlansReasonFailedOnesAreNot) {
+  PlateScenario s;
+  const NominalModel nominal = nominal_model(s.part.mesh, Eigen::Isometry3d::Identity(), 30);
+  s.result.edges.resize(2);
+  EdgeResult on_plate;
+  on_plate.id = 2;
+  on_plate.status = FeatureStatus::not_planned;
+  on_plate.reason = "open boundary: the mesh has no surface beyond it";
+  s.result.edges.push_back(on_plate);
+  HoleResult blocked;
+  blocked.id = 1;
+  blocked.reason = "bore touch 0 is out of reach";
+  s.result.holes.push_back(blocked);
+  InspectionScope scope;
+  EXPECT_EQ(inspect(s.result, {}, nominal, s.tolerances, {}, scope).verdict, Verdict::incomplete);
+  scope.exclude_not_probeable = true;
+  InspectionResult r = inspect(s.result, {}, nominal, s.tolerances, {}, scope);
+  EXPECT_EQ(r.verdict, Verdict::pass);
+  EXPECT_EQ(r.edges[2].reason, std::string(kNotProbeable) + ": open boundary: the mesh has no surface beyond it");
+  EXPECT_EQ(r.holes[1].diameter.verdict, Verdict::excluded);
+  EXPECT_EQ(r.hole_counts.excluded, 1);
+  EXPECT_EQ(coverage_text(r), "2 of 2 inspected edge points measured, 1 of 1 inspected holes measured; 1 edge point and "
+                              "1 hole excluded (not probeable in this set-up)");
+
+  s.result.edges[1].status = FeatureStatus::failed;  // planned, touched, refused: still asked for
+  s.result.edges[1].scan.reset();
+  r = inspect(s.result, {}, nominal, s.tolerances, {}, scope);
+  EXPECT_EQ(r.verdict, Verdict::incomplete);
+  EXPECT_EQ(r.edge_counts.not_measured, 1);
+}
+
+// Asking for some features only: the rest are excluded as not asked for; a curve asks for its points;
+// an id the model does not have is noted, never silently dropped.
+TEST(Inspect, AChosenScopeExcludesTheRestAsNotAskedFor) {
+  PlateScenario s;
+  const NominalModel nominal = nominal_model(s.part.mesh, Eigen::Isometry3d::Identity(), 30);
+  std::vector<geometry::EdgePoint> reference(6);
+  for (int i = 0; i < 6; ++i) reference[static_cast<std::size_t>(i)].curve = i < 2 ? 7 : 8;
+  InspectionScope scope;
+  scope.edge_points = std::set<int>{};
+  scope.curves = {7};
+  scope.holes = std::set<int>{0, 9};
+  const InspectionResult r = inspect(s.result, reference, nominal, s.tolerances, {}, scope);
+  EXPECT_EQ(r.edge_counts.pass, 2);
+  EXPECT_EQ(r.edge_counts.excluded, 4);
+  EXPECT_EQ(r.edges[5].reason, kNotAskedFor);
+  EXPECT_EQ(r.hole_counts.pass, 1);
+  EXPECT_EQ(r.verdict, Verdict::pass);
+  ASSERT_EQ(r.notes.size(), 1u);
+  EXPECT_EQ(r.notes[0], "inspect: the model has no hole 9");
+
+  InspectionScope nothing;
+  nothing.edge_points = std::set<int>{};
+  nothing.holes = std::set<int>{};
+  EXPECT_EQ(inspect(s.result, reference, nominal, s.tolerances, {}, nothing).verdict, Verdict::incomplete)
+      << "a job asked to inspect nothing has inspected nothing";
 }
 
 TEST(Inspect, WithoutANominalTheResultHasNoInspection) {

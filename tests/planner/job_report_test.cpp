@@ -141,6 +141,9 @@ TEST_F(JobReport, HoldsTheVerdictAndEveryFeature) {
   EXPECT_THAT(html, HasSubstr("<th>Edge points</th><td class=\"num v-pass\">1</td><td class=\"num v-fail\">1</td>"
                               "<td class=\"num v-undecided\">1</td><td class=\"num v-not-measured\">1</td>"));
   EXPECT_THAT(html, HasSubstr("<th>Holes</th><td class=\"num v-pass\">0</td><td class=\"num v-fail\">1</td>"));
+  // What the verdict covers, in the words every output uses.
+  EXPECT_THAT(html, HasSubstr("<p class=\"coverage\">3 of 4 inspected edge points measured (1 not measured), 1 of 1 "
+                              "inspected holes measured.</p>"));
   // Edge rows: nominal, measured, deviation with its sign, tolerance, U and a coloured verdict.
   EXPECT_THAT(html, HasSubstr("<td>E1</td><td class=\"kind\">sharp edge, 2 touches</td><td class=\"num\">10.0000, 0.0000, 40.0000"
                               "</td><td class=\"num\">10.0000, -0.0040, 40.0000</td><td class=\"num\">+0.0051</td>"

@@ -224,8 +224,17 @@ std::string measurement_of(const std::string& xml, const std::string& kind, cons
   return {};
 }
 
+// The schema's enumerated status, or the free-text one (OtherCharacteristicStatus) where it has no word.
 std::string status_of(const std::string& measurement) {
-  return between(measurement, "<CharacteristicStatusEnum>", "</CharacteristicStatusEnum>");
+  const std::string status = between(measurement, "<CharacteristicStatusEnum>", "</CharacteristicStatusEnum>");
+  return status.empty() ? "other " + between(measurement, "<OtherCharacteristicStatus>", "</OtherCharacteristicStatus>")
+                        : status;
+}
+
+// The part's status the same way (InspectionStatusEnum or OtherInspectionStatus).
+std::string part_status_of(const std::string& block) {
+  const std::string status = between(block, "<InspectionStatusEnum>", "</InspectionStatusEnum>");
+  return status.empty() ? "other " + between(block, "<OtherInspectionStatus>", "</OtherInspectionStatus>") : status;
 }
 
 // Ids unique, idMax their largest, and every reference (an element whose name ends in "Id" holding
@@ -267,13 +276,14 @@ TEST(QifExport, InspectedResultValidatesAndCarriesTheVerdicts) {
   // Its combined standard uncertainty: U / k.
   EXPECT_NE(measurement_of(xml, "Position", "hole 0 position").find("combinedUncertainty=\"0.001\""), std::string::npos);
 
-  // Not measured: the characteristic is there, NOT_ANALYZED, with its reason and no actual.
+  // Not measured: the characteristic is there, NOT_MEASURED (free text: the enumeration has no such
+  // word, and NOT_ANALYZED would say measured, not evaluated), with its reason and no actual.
   const std::string missed = measurement_of(xml, "PointProfile", "edge point 3 profile");
-  EXPECT_EQ(status_of(missed), "NOT_ANALYZED");
+  EXPECT_EQ(status_of(missed), "other NOT_MEASURED");
   EXPECT_NE(missed.find("touch 7 (edge 3) missed"), std::string::npos) << missed;
   EXPECT_EQ(missed.find("<Value"), std::string::npos);
   EXPECT_EQ(missed.find("FeatureMeasurementIds"), std::string::npos);
-  EXPECT_EQ(status_of(measurement_of(xml, "Diameter", "hole 1 diameter")), "NOT_ANALYZED");
+  EXPECT_EQ(status_of(measurement_of(xml, "Diameter", "hole 1 diameter")), "other NOT_MEASURED");
   EXPECT_EQ(measurement_of(xml, "Diameter", "hole 1 diameter").find("<Value"), std::string::npos);
 
   // Features: all four points and both holes are defined, the three measured points and one hole measured.
@@ -349,20 +359,42 @@ TEST(QifExport, WithoutNominalWritesMeasuredFeaturesAndNoCharacteristics) {
   EXPECT_EQ(blocks(xml, "Transform").size(), 1u);
 }
 
+// QIF's part status has no INCOMPLETE: an incomplete job is the free-text OtherInspectionStatus
+// "INCOMPLETE", never PASS and not the UNKNOWN an undecided one gets; each form validates.
 TEST(QifExport, PartStatusFollowsTheJobVerdict) {
   MeasurementResult r = inspected_result();
   const std::pair<Verdict, const char*> cases[] = {{Verdict::pass, "PASS"},
+                                                   {Verdict::fail, "FAIL"},
                                                    {Verdict::undecided, "UNKNOWN"},
-                                                   {Verdict::not_measured, "NOT_MEASURED"}};
+                                                   {Verdict::incomplete, "other INCOMPLETE"}};
   for (const auto& [verdict, status] : cases) {
     r.inspection->verdict = verdict;
     const std::string xml = to_qif(r, context());
-    for (const std::string& block : blocks(xml, "InspectionStatus"))
-      EXPECT_EQ(between(block, "<InspectionStatusEnum>", "</InspectionStatusEnum>"), status);
+    for (const std::string& block : blocks(xml, "InspectionStatus")) EXPECT_EQ(part_status_of(block), status);
     EXPECT_EQ(blocks(xml, "InspectionStatus").size(), 1u);
-    EXPECT_EQ(between(blocks(xml, "ActualComponent").at(0), "<InspectionStatusEnum>", "</InspectionStatusEnum>"), status);
+    EXPECT_EQ(part_status_of(blocks(xml, "ActualComponent").at(0)), status);
+    expect_valid(xml, to_string(verdict));
   }
-  expect_valid(to_qif(r, context()), "not_measured");
+}
+
+// A characteristic left out on purpose: there, EXCLUDED (free text), with the request's reason and no
+// actual, even when its feature was measured.
+TEST(QifExport, AnExcludedCharacteristicIsWrittenAsExcludedWithItsReason) {
+  MeasurementResult r = inspected_result();
+  r.inspection->edges[3].profile.verdict = Verdict::excluded;
+  r.inspection->edges[3].reason = "standing on the plate";
+  r.inspection->edges[0].profile.verdict = Verdict::excluded;
+  r.inspection->edges[0].reason = "not asked for";
+  r.inspection->edge_counts = {.pass = 0, .fail = 1, .undecided = 1, .not_measured = 0, .excluded = 2};
+  const std::string xml = to_qif(r, context());
+  expect_valid(xml, "excluded");
+  expect_references_resolve(xml);
+  const std::string left_out = measurement_of(xml, "PointProfile", "edge point 3 profile");
+  EXPECT_EQ(status_of(left_out), "other EXCLUDED");
+  EXPECT_NE(left_out.find("excluded: standing on the plate"), std::string::npos) << left_out;
+  const std::string measured_but_not_asked = measurement_of(xml, "PointProfile", "edge point 0 profile");
+  EXPECT_EQ(status_of(measured_but_not_asked), "other EXCLUDED");
+  EXPECT_EQ(measured_but_not_asked.find("<Value"), std::string::npos) << "an excluded characteristic is not judged";
 }
 
 TEST(QifExport, EmptyResultAndEmptyContextStillValidate) {
@@ -376,7 +408,7 @@ TEST(QifExport, EmptyResultAndEmptyContextStillValidate) {
   MeasurementResult unmeasured = inspected_result();
   for (EdgeResult& e : unmeasured.edges) e.status = FeatureStatus::not_planned;
   for (HoleResult& h : unmeasured.holes) h.status = FeatureStatus::not_planned;
-  unmeasured.inspection->verdict = Verdict::not_measured;
+  unmeasured.inspection->verdict = Verdict::incomplete;
   const std::string none = to_qif(unmeasured, context());
   expect_valid(none, "unmeasured");
   expect_references_resolve(none);

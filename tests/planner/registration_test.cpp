@@ -349,6 +349,71 @@ TEST(RegistrationRefuses, AMirroredOrderInM) {
   EXPECT_EQ(kind, RegistrationError::Kind::mirrored);
 }
 
+// --- one frame's corners alone, before anything moves (issue 34) ---------------------------------
+
+std::string plate_corner_error(const std::vector<int>& ids, const std::vector<Vec3>& points, char frame,
+                               const description::Plate& plate, double tolerance, std::vector<int>* corners = nullptr,
+                               RegistrationError::Kind* kind = nullptr) {
+  try {
+    check_plate_corners(ids, points, frame, frame == 'S' ? "scan_corners (S)" : "rough_machine (M)", plate, tolerance);
+  } catch (const RegistrationError& e) {
+    if (corners) *corners = e.corners();
+    if (kind) *kind = e.kind();
+    return e.what();
+  }
+  return "";
+}
+
+TEST(PlateCornersAlone, SwappedScanCornersAreRefusedByTheirLengths) {
+  const Scene s = scene();
+  std::vector<Vec3> scan;
+  for (int id = 1; id <= 4; ++id) scan.push_back(s.T_S_P * s.plate.corner(id));
+  EXPECT_EQ(plate_corner_error({1, 2, 3, 4}, scan, 'S', s.plate, 0.5), "");
+  std::swap(scan[1], scan[2]);  // corners 2 and 3 given in each other's place
+  RegistrationError::Kind kind{};
+  const std::string message = plate_corner_error({1, 2, 3, 4}, scan, 'S', s.plate, 0.5, nullptr, &kind);
+  EXPECT_THAT(message, HasSubstr("scan_corners (S): "));
+  EXPECT_THAT(message, HasSubstr("in S, the plate says"));
+  EXPECT_THAT(message, HasSubstr("the one given as corner 2 is corner 3, the one given as corner 3 is corner 2): corners swapped?"));
+  EXPECT_EQ(kind, RegistrationError::Kind::nominal_length);
+}
+
+TEST(PlateCornersAlone, ARoughCornerFarOffIsBlamedOnThatCorner) {
+  const Scene s = scene();
+  std::vector<Vec3> rough;
+  for (int id = 1; id <= 4; ++id) rough.push_back(s.T_M_P() * s.plate.corner(id) + Vec3(0.8, -0.6, 0.2));
+  EXPECT_EQ(plate_corner_error({1, 2, 3, 4}, rough, 'M', s.plate, 4), "");
+  rough[1] += s.T_M_P().linear() * Vec3(30, 0, 0);  // corner 2 taught 30 mm off along its side
+  std::vector<int> corners;
+  const std::string message = plate_corner_error({1, 2, 3, 4}, rough, 'M', s.plate, 4, &corners);
+  EXPECT_THAT(message, HasSubstr("rough_machine (M): "));
+  EXPECT_THAT(message, HasSubstr("corner 2 is in every one: it is probably the one that is off"));
+  EXPECT_EQ(corners, std::vector<int>{2});
+}
+
+TEST(PlateCornersAlone, AMirroredOrderInMIsRefusedAndInSOnlyWithItsUp) {
+  const Scene s = scene(rectangle_json(150, 150));
+  std::vector<Vec3> machine, scan;
+  for (int id : {1, 4, 3, 2}) {
+    machine.push_back(s.T_M_P() * s.plate.corner(id));
+    scan.push_back(s.T_S_P * s.plate.corner(id));
+  }
+  RegistrationError::Kind kind{};
+  EXPECT_THAT(plate_corner_error({1, 2, 3, 4}, machine, 'M', s.plate, 0.5, nullptr, &kind),
+              HasSubstr("the corner order is mirrored"));
+  EXPECT_EQ(kind, RegistrationError::Kind::mirrored);
+  EXPECT_EQ(plate_corner_error({1, 2, 3, 4}, scan, 'S', s.plate, 0.5), "");  // S's up is not known
+  EXPECT_THROW(check_plate_corners({1, 2, 3, 4}, scan, 'S', "scan", s.plate, 0.5, s.T_S_P.linear() * Vec3::UnitZ()),
+               RegistrationError);
+}
+
+TEST(PlateCornersAlone, UnknownOrRepeatedIdsAndTooFewCorners) {
+  const Scene s = scene();
+  const std::vector<Vec3> three = {s.T_S_P * s.plate.corner(1), s.T_S_P * s.plate.corner(2), s.T_S_P * s.plate.corner(3)};
+  EXPECT_THAT(plate_corner_error({1, 2, 7}, three, 'S', s.plate, 0.5), HasSubstr("corner 7 is listed twice or is not a corner"));
+  EXPECT_THAT(plate_corner_error({1, 2}, {three[0], three[1]}, 'S', s.plate, 0.5), HasSubstr("at least three corners"));
+}
+
 TEST(RegistrationRefuses, AMirroredOrderInSWhenTheScanKnowsItsUp) {
   const Scene s = scene(rectangle_json(150, 150));
   RegistrationInput in = s.input();
