@@ -28,6 +28,7 @@
 #include "geometry/analytic_parts.hpp"
 #include "geometry/true_edge_distance.hpp"
 #include "sim/sim_config.hpp"
+#include "tests/tools/run_command.hpp"
 
 namespace cmm {
 namespace {
@@ -192,6 +193,17 @@ TEST(CmmdTips, TheSamplePartsBoresAreMeasuredWithT2AndItsEdgesWithT1OnTheTrueEdg
   EXPECT_LE(rms, 0.003);
   EXPECT_EQ(diameter_error.size(), part.holes.size()) << "not every bore of the part was measured";
   EXPECT_LE(worst_diameter, 0.005);
+  // cmm-truth, as an operator would hold the result against the simulator's part, says the same.
+  const std::filesystem::path result_file = s.dir.path / "result.json", truth_file = s.dir.path / "truth.json";
+  std::ofstream(result_file) << result.dump() << "\n";
+  const auto truth_run = cmm::test::run_command(std::string(CMMD_BINARY_DIR "/sim/cmm-truth --config ") + s.config.string() +
+                                                " " + result_file.string() + " --json " + truth_file.string());
+  ASSERT_EQ(truth_run.exit_code, 0) << truth_run.output;
+  std::printf("cmm-truth: %s", truth_run.output.c_str());
+  const json figures = testing::read_json_file(truth_file);
+  EXPECT_LE(figures.at("edges").at("rms_mm").get<double>(), 0.003) << figures.dump();
+  EXPECT_EQ(figures.at("holes").at("count"), 5) << figures.dump();
+  EXPECT_LE(figures.at("holes").at("diameter_max_mm").get<double>(), 0.005) << figures.dump();
 
   // Each touch names its tip and the qualification it was made under; each tip's qualification is
   // the one machine.qualify measured.
