@@ -106,21 +106,30 @@ function render_tip() {
   const tips = last_status && Array.isArray(last_status.tips) ? last_status.tips : [];
   $('m-tip').textContent = (last_status && last_status.tip) || '–';
   const table = $('m-tips');
-  table.replaceChildren();
-  for (const t of tips) {
-    const row = table.insertRow();
-    const th = document.createElement('th');
-    th.textContent = `${t.id}${t.active ? ' (active)' : ''}`;
-    row.appendChild(th);
-    const td = row.insertCell();
-    td.dataset.tip = t.id;
-    td.textContent = t.qualification
+  const ids = tips.map((t) => t.id).join(',');
+  // Rows are made when the tips change and updated in place on every poll: nothing under the
+  // operator's pointer (or a test's reference) is replaced twice a second.
+  if (table.dataset.ids !== ids) {
+    table.replaceChildren();
+    for (const t of tips) {
+      const row = table.insertRow();
+      row.appendChild(document.createElement('th'));
+      row.insertCell().dataset.tip = t.id;
+    }
+    table.dataset.ids = ids;
+  }
+  for (const [i, t] of tips.entries()) {
+    const row = table.rows[i];
+    const heading = `${t.id}${t.active ? ' (active)' : ''}`;
+    if (row.cells[0].textContent !== heading) row.cells[0].textContent = heading;
+    const td = row.cells[1];
+    const text = t.qualification
       ? `r ${fmt(t.ball_radius_mm, 4)} mm, qualified ${t.qualification.time_utc} (sphere fit RMS ${fmt(t.qualification.residual_rms_mm, 4)} mm)`
       : `not qualified: nominal r ${fmt(t.ball_radius_mm, 4)} mm`;
+    if (td.textContent !== text) td.textContent = text;
     td.className = t.qualification ? 'good' : 'warn';
   }
   const select = $('qualify-tip');
-  const ids = tips.map((t) => t.id).join(',');
   if (select.dataset.ids !== ids) {
     const chosen = select.value;
     select.replaceChildren(...tips.map((t) => new Option(t.id, t.id)));
