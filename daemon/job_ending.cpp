@@ -17,6 +17,11 @@ JobEnding ending_of(std::exception_ptr error, const JobControl& control) {
   try {
     std::rethrow_exception(error);
   } catch (const JobHold& hold) {
+    // A cancel or a shutdown that came while the run was running into a hold (a tip to qualify, a
+    // full disk) is not lost to the pause: what the operator or cmmd asked for wins.
+    if (hold.ending().state == JobState::paused && control.cancel) return {JobState::cancelled, cancelled_reason, std::nullopt};
+    if (hold.ending().state == JobState::paused && control.shutdown)
+      return {JobState::interrupted, interrupted_reason, std::nullopt};
     return hold.ending();
   } catch (const geometry::Cancelled&) {
     // Planning heard the cancel or the shutdown.

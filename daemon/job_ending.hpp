@@ -32,8 +32,9 @@ class JobHold : public std::runtime_error {
 };
 
 // The ending for what ended a run, given what was asked of it meanwhile: a cancel or a shutdown the
-// stages heard (geometry::Cancelled) or that stopped the machine (the driver's Aborted); a hold; a
-// machine fault (paused, resumable); a job error (RpcError: failed); a machine not ready (paused); a
+// stages heard (geometry::Cancelled) or that stopped the machine (the driver's Aborted); a hold (but
+// a hold that would pause a job whose cancel or shutdown came meanwhile ends it as asked); a machine
+// fault (paused, resumable); a job error (RpcError: failed); a machine not ready (paused); a
 // file of the job that could not be written (paused: storage full); anything else failed (Internal).
 JobEnding ending_of(std::exception_ptr error, const JobControl& control);
 

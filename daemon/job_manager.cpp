@@ -158,7 +158,10 @@ JobSink JobManager::sink_for(Job& job) {
     // free before anyone hears so, and a machine.home sent on that word is not refused as busy.
     if (!is_running(state)) lease_.reset();
     std::lock_guard lock(mutex_);
-    set_state(job, state, reason, fault);
+    // A cancel that came after the run decided to hold and before it said so is not lost to the pause
+    // (ending_of keeps one that came before).
+    if (state == JobState::paused && job.control.cancel) set_state(job, JobState::cancelled, "cancelled by the operator", std::nullopt);
+    else set_state(job, state, reason, fault);
   };
   sink.progress = [this, &job](const JobProgress& progress) {
     nlohmann::json params;
