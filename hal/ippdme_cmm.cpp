@@ -31,6 +31,27 @@ Term axis(const char* name, double v) { return ippdme::call_term(name, {ippdme::
 Term ask(const char* name) { return ippdme::call_term(name); }
 std::vector<Term> xyz(const Vec3& p) { return {axis("X", p.x()), axis("Y", p.y()), axis("Z", p.z())}; }
 const auto kStartTime = Clock::now();
+std::string code_text(int code) {
+  char out[8];
+  std::snprintf(out, sizeof out, "%04d", code);
+  return out;
+}
+// §6.3.2.7: OnMoveReportE's Time is at least 0.1 s (at most 10 reports a second).
+constexpr double kMinMoveReportS = 0.1;
+// What a motion may take beyond twice its path's time and response_s: the controller's own set-up
+// and settling, which no description states.
+constexpr double kMotionSlackS = 3;
+// A reported ER within this of the radius the server's tool has is that radius: servers print µm or
+// finer, and a µm on ER moves the ball centre by as much, below a trigger's repeatability.
+constexpr double kRadiusToleranceMm = 0.001;
+// Time for `length` at up to `speed` with `accel` from rest to rest: a trapezoid, or a triangle
+// when the path is too short to reach the speed.
+double path_time_s(double length, double speed, double accel) {
+  if (length <= 0) return 0;
+  const double ramp = speed * speed / accel;  // both ramps' length together
+  if (length < ramp) return 2 * std::sqrt(length / accel);
+  return length / speed + speed / accel;
+}
 }  // namespace
 
 IppDmeSettings ippdme_settings_from_json(const nlohmann::json& j, const std::string& base_dir) {
@@ -54,9 +75,15 @@ IppDmeSettings ippdme_settings_from_json(const nlohmann::json& j, const std::str
   description::JsonFields t = b.object("timeouts");
   s.connect_timeout_s = t.number("connect_s", s.connect_timeout_s, 0.01, 600);
   s.response_timeout_s = t.number("response_s", s.response_timeout_s, 0.01, 600);
-  s.motion_timeout_s = t.number("motion_s", s.motion_timeout_s, 0.1, 86400);
+  s.motion_timeout_s = t.number("motion_s", s.motion_timeout_s, 0, 86400);
+  if (s.motion_timeout_s > 0 && s.motion_timeout_s < 0.1)
+    t.problem("motion_s", "must be 0 (no cap) or at least 0.1 s, not " + std::to_string(s.motion_timeout_s));
   t.finish();
-  s.move_report_s = b.number("move_report_s", s.move_report_s, 0.001, 10);
+  if (b.has("move_report_s") && b.member("move_report_s").value().is_number() &&
+      b.member("move_report_s").value().get<double>() < kMinMoveReportS)
+    b.problem("move_report_s", "must be at least 0.1 s: I++ DME 1.4.3 §6.3.2.7 allows at most 10 move reports a second");
+  else
+    s.move_report_s = b.number("move_report_s", s.move_report_s, kMinMoveReportS, 10);
   s.connect_attempts = b.integer("connect_attempts", s.connect_attempts, 1, 100);
   s.connect_backoff_s = b.number("connect_backoff_s", s.connect_backoff_s, 0, 60);
   s.protocol_log = b.text("protocol_log", s.protocol_log);
@@ -261,20 +288,35 @@ void IppDmeCmm::start_session() {
     if (auto v = ippdme::number_of(items, "Tool.PtMeasPar.Retract")) retract_ = *v;
     if (auto v = ippdme::number_of(items, "Tool.GoToPar.Speed")) goto_speed_ = *v;
   }
-  // The move-report daemon: status() while a motion runs (a Get would wait behind the motion).
-  Items daemon = {ippdme::call_term("Time", {ippdme::number_term(settings_.move_report_s)}), ask("X"), ask("Y"), ask("Z")};
-  if (has_clock_) daemon.push_back(ask("Clock"));
-  auto tx = send(Kind::fast, "OnMoveReportE", daemon, "connect");
-  {
-    std::lock_guard lock(mutex_);
-    report_tag_ = tx->tag;
-  }
+  start_move_reports();
   std::optional<double> clock;
   const Vec3 at = query_position(&clock);
   std::lock_guard lock(mutex_);
   reported_ = at;
   reported_clock_ = clock;
   homed_ = is_homed;
+}
+
+void IppDmeCmm::start_move_reports() {
+  // §6.3.2.7: the client stops a daemon before it starts one; a server that kept one from a
+  // session that never ended answers a second with 0515. None running is warning 0512 (§8.2); a
+  // server that raises it to an error has had it cleared by transact, and there is still none.
+  try {
+    transact(Kind::fast, "StopAllDaemons", {}, "connect");
+  } catch (const Protocol&) {
+  }
+  // status() while a motion runs (a Get would wait behind the motion). The command ends at once;
+  // its reports follow under its tag.
+  Items daemon = {ippdme::call_term("Time", {ippdme::number_term(settings_.move_report_s)}), ask("X"), ask("Y"), ask("Z")};
+  if (has_clock_) daemon.push_back(ask("Clock"));
+  auto tx = send(Kind::fast, "OnMoveReportE", daemon, "connect", true);
+  try {
+    wait(tx, settings_.response_timeout_s, "connect", "OnMoveReportE");
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    report_tag_.reset();
+    throw;
+  }
 }
 
 void IppDmeCmm::write_line(const std::string& line, const char* what) {
@@ -379,6 +421,7 @@ void IppDmeCmm::on_line(const std::string& line) {
       homed_ = false;
       estop_text_ = reply->error.text;
     }
+    if (reply->kind == ippdme::ReplyKind::error) end_pending_locked(*reply);
     wake_.notify_all();
     return;
   }
@@ -405,6 +448,8 @@ void IppDmeCmm::on_line(const std::string& line) {
       if (reply->error.severity < 2) {
         tx.warnings.push_back(reply->error);
       } else {
+        // It ends here whether or not a `%` follows (§6.2.3's example sends one; a late `%` finds
+        // no open transaction and is dropped).
         tx.error = reply->error;
         tx.done = true;
         if (reply->error.code == ippdme::kErrorEStop) {
@@ -416,8 +461,34 @@ void IppDmeCmm::on_line(const std::string& line) {
       break;
   }
   if (reply->kind == ippdme::ReplyKind::data || (reply->kind == ippdme::ReplyKind::error && !tx.done)) wake = false;
+  const bool failed = tx.done && tx.error;
   if (tx.done) open_.erase(it);
+  if (failed) end_pending_locked(*reply);
   if (wake) wake_.notify_all();
+}
+
+void IppDmeCmm::end_pending_locked(const ippdme::Reply& cause) {
+  // §6.2.5: a severity ≥ 2 error aborts every pending transaction. The specification answers each
+  // 0006 (§6.3.1.5); NIST's server drops them without a word. Either way none will run: they end
+  // now, and whatever the server still says on their tags is dropped. 0006 and 0514 are the
+  // consequences of an error already seen (or of our own AbortE), never a cause; the fast queue is
+  // answered at once, never pending.
+  const int code = cause.error.code;
+  if (cause.error.severity < 2 || code == ippdme::kErrorTransactionAborted || code == ippdme::kErrorUseClearAllErrors)
+    return;
+  const std::string by = ippdme::format_tag(cause.tag) + " (" + cause.error.method + ", error " +
+                         code_text(cause.error.code) + ": " + cause.error.text + ")";
+  for (auto it = open_.begin(); it != open_.end();) {
+    Transaction& tx = *it->second;
+    if (tx.tag.event) {
+      ++it;
+      continue;
+    }
+    tx.error = cause.error;
+    tx.ended_by = by;
+    tx.done = true;
+    it = open_.erase(it);
+  }
 }
 
 ippdme::Tag IppDmeCmm::next_tag(bool event) {
@@ -431,7 +502,7 @@ ippdme::Tag IppDmeCmm::next_tag(bool event) {
 }
 
 std::shared_ptr<IppDmeCmm::Transaction> IppDmeCmm::send(Kind kind, const std::string& method, const Items& args,
-                                                        const char* what) {
+                                                        const char* what, bool daemon) {
   std::lock_guard send_lock(send_mutex_);
   auto tx = std::make_shared<Transaction>();
   {
@@ -446,6 +517,7 @@ std::shared_ptr<IppDmeCmm::Transaction> IppDmeCmm::send(Kind kind, const std::st
     tx->wake_on_ack = kind != Kind::query;
     tx->line = ippdme::format_command({tx->tag, method, args});
     open_[ippdme::format_tag(tx->tag)] = tx;
+    if (daemon) report_tag_ = tx->tag;  // its reports may come before its `%` (§6.2.4)
   }
   write_line(tx->line, what);
   // The next command goes out once this one is acknowledged (or refused before it was). A query
@@ -482,16 +554,29 @@ IppDmeCmm::Outcome IppDmeCmm::wait(const std::shared_ptr<Transaction>& tx, doubl
                   " s; the link is down until connect()");
   }
   const std::optional<ippdme::ServerError> error = tx->error;
+  const bool unanswered = !tx->ended_by.empty();
   Outcome out{tx->data, tx->warnings};
   lock.unlock();
+  if (unanswered) fail_unanswered(*tx, what);
   if (error) fail(*error, what, method);
   return out;
 }
 
+void IppDmeCmm::fail_unanswered(const Transaction& tx, const char* what) {
+  bool estop = false;
+  {
+    std::lock_guard lock(mutex_);
+    estop = estop_;
+  }
+  if (estop) throw EStop(std::string(what) + ": the machine's emergency stop (" + tx.ended_by + "); reset() after releasing it");
+  // The transaction that failed clears the server's error state; this one never ran.
+  throw Protocol(std::string(what) + ": \"" + tx.line + "\" was never run: the server aborted it when " + tx.ended_by +
+                 " failed (I++ DME 1.4.3 §6.2.5)");
+}
+
 void IppDmeCmm::fail(const ippdme::ServerError& e, const char* what, const std::string& method) {
-  char code[8];
-  std::snprintf(code, sizeof code, "%04d", e.code);
-  const std::string message = std::string(what) + ": the machine answered error " + code + " (" + e.text + ") to " + method;
+  const std::string message =
+      std::string(what) + ": the machine answered error " + code_text(e.code) + " (" + e.text + ") to " + method;
   bool estop = false;
   {
     std::lock_guard lock(mutex_);
@@ -508,7 +593,22 @@ void IppDmeCmm::fail(const ippdme::ServerError& e, const char* what, const std::
     throw Protocol(message + ", a fatal error; the link is down until connect()");
   }
   clear_errors(what);  // the server refuses everything else until it is cleared
+  // 0507 "Illegal command" is what NIST's server says to a motion before Home, but not only that:
+  // the machine's own word decides.
+  const bool motion = method == "GoTo" || method == "PtMeas";
+  if (e.code == ippdme::kErrorIllegalCommand && motion && !server_homed(what))
+    throw NotHomed(message + "; the machine is not homed");
   throw_fault(ippdme::fault_from_error(e.code), message);
+}
+
+bool IppDmeCmm::server_homed(const char* what) {
+  const Outcome homed = transact(Kind::query, "IsHomed", {}, what);
+  bool is_homed = false;
+  for (const auto& items : homed.data)
+    if (auto h = ippdme::number_of(items, "IsHomed")) is_homed = *h != 0;
+  std::lock_guard lock(mutex_);
+  homed_ = is_homed;
+  return is_homed;
 }
 
 void IppDmeCmm::clear_errors(const char* what) {
@@ -516,7 +616,8 @@ void IppDmeCmm::clear_errors(const char* what) {
   wait(tx, settings_.response_timeout_s, what, "ClearAllErrors");
 }
 
-IppDmeCmm::Outcome IppDmeCmm::transact(Kind kind, const std::string& method, Items args, const char* what) {
+IppDmeCmm::Outcome IppDmeCmm::transact(Kind kind, const std::string& method, Items args, const char* what,
+                                       double bound_s) {
   if (kind != Kind::motion) {
     auto tx = send(kind, method, args, what);
     return wait(tx, settings_.response_timeout_s, what, method);
@@ -539,7 +640,21 @@ IppDmeCmm::Outcome IppDmeCmm::transact(Kind kind, const std::string& method, Ite
     std::atomic<bool>& flag;
     ~Done() { flag = false; }
   } done{in_motion_};
-  return wait(tx, settings_.motion_timeout_s, what, method);
+  return wait(tx, bound_s, what, method);
+}
+
+double IppDmeCmm::motion_bound_s(double length_mm, double speed_mm_s) const {
+  const double accel = settings_.machine.max_accel_mm_s2;
+  const double speed = speed_mm_s > 0 ? speed_mm_s : settings_.machine.max_speed_mm_s;
+  const double bound = 2 * path_time_s(length_mm, speed, accel) + settings_.response_timeout_s + kMotionSlackS;
+  return settings_.motion_timeout_s > 0 ? std::min(bound, settings_.motion_timeout_s) : bound;
+}
+
+double IppDmeCmm::home_bound_s() const {
+  // Homing's path is the controller's: at worst each axis the box's length, one after the other, at
+  // a tenth of the top speed (machines seek their reference marks slowly).
+  const Vec3 extent = settings_.machine.travel_box.max - settings_.machine.travel_box.min;
+  return motion_bound_s(extent.sum(), settings_.machine.max_speed_mm_s / 10);
 }
 
 // ---- status ---------------------------------------------------------------------------------
@@ -644,9 +759,21 @@ void IppDmeCmm::set_prop(const std::string& name, double value, double& cache, c
 }
 
 void IppDmeCmm::do_home() {
-  transact(Kind::motion, "Home", {}, "home");
+  transact(Kind::motion, "Home", {}, "home", home_bound_s());
   std::lock_guard lock(mutex_);
   homed_ = true;
+}
+
+Vec3 IppDmeCmm::last_position() const {
+  std::lock_guard lock(mutex_);
+  return reported_;
+}
+
+void IppDmeCmm::go_to(const Vec3& target, const char* what) {
+  const double bound = motion_bound_s((target - last_position()).norm(), goto_speed_);
+  transact(Kind::motion, "GoTo", xyz(target), what, bound);
+  std::lock_guard lock(mutex_);
+  reported_ = target;  // where a GoTo ends (§6.3.2.12); the next motion's bound starts here
 }
 
 void IppDmeCmm::do_move(const Move& m) {
@@ -655,7 +782,7 @@ void IppDmeCmm::do_move(const Move& m) {
   const double max_speed = settings_.machine.max_speed_mm_s;
   set_prop("Tool.GoToPar.Speed", std::min(m.speed_mm_s > 0 ? m.speed_mm_s : max_speed, max_speed), goto_speed_, "move");
   try {
-    transact(Kind::motion, "GoTo", xyz(theirs_inside(m.target)), "move");
+    go_to(theirs_inside(m.target), "move");
   } catch (const EarlyTrigger& e) {
     throw EarlyTrigger(std::string("the probe touched during a guarded move to ") + text(m.target) + ": " + e.what());
   }
@@ -670,7 +797,7 @@ TouchResult IppDmeCmm::do_probe(const ProbeMove& p) {
     const double max_speed = settings_.machine.max_speed_mm_s;
     set_prop("Tool.GoToPar.Speed", max_speed, goto_speed_, "probe");
     try {
-      transact(Kind::motion, "GoTo", xyz(theirs_inside(p.start)), "probe");
+      go_to(theirs_inside(p.start), "probe");
     } catch (const EarlyTrigger& e) {
       throw EarlyTrigger("the probe touched on the way to the search start " + text(p.start) + ": " + e.what());
     }
@@ -679,7 +806,8 @@ TouchResult IppDmeCmm::do_probe(const ProbeMove& p) {
   // half the travel ahead (Approach = Search = travel / 2), IJK = −d, and the server puts the ball
   // centre at N + IJK·(Approach + r), with r the radius it compensates with (its last ER).
   const double half = p.max_travel_mm / 2;
-  set_prop("Tool.PtMeasPar.Speed", p.speed_mm_s > 0 ? p.speed_mm_s : settings_.machine.probe_speed_mm_s, probe_speed_, "probe");
+  const double speed = p.speed_mm_s > 0 ? p.speed_mm_s : settings_.machine.probe_speed_mm_s;
+  set_prop("Tool.PtMeasPar.Speed", speed, probe_speed_, "probe");
   set_prop("Tool.PtMeasPar.Approach", half, approach_, "probe");
   set_prop("Tool.PtMeasPar.Search", half, search_, "probe");
   set_prop("Tool.PtMeasPar.Retract", std::max(0.0, p.retract_mm), retract_, "probe");
@@ -690,13 +818,16 @@ TouchResult IppDmeCmm::do_probe(const ProbeMove& p) {
     r = server_radii_.at(active_);
   }
   const Vec3 nominal = theirs(p.start) + d * (half + r);
+  // The way to the search start (nothing, after the GoTo above), the search and the retract, all
+  // counted at the probing speed.
+  const double path = (theirs(p.start) - last_position()).norm() + p.max_travel_mm + std::max(0.0, p.retract_mm);
   Outcome out;
   try {
     out = transact(Kind::motion, "PtMeas",
                    {axis("X", nominal.x()), axis("Y", nominal.y()), axis("Z", nominal.z()),
                     ippdme::call_term("IJK", {ippdme::number_term(ijk.x()), ippdme::number_term(ijk.y()),
                                               ippdme::number_term(ijk.z())})},
-                   "probe");
+                   "probe", motion_bound_s(path, speed));
   } catch (const NoContact&) {
     if (p.fail_on_miss) throw;
     TouchResult miss;
@@ -706,23 +837,18 @@ TouchResult IppDmeCmm::do_probe(const ProbeMove& p) {
     miss.t_s = status().t_s;
     return miss;
   }
-  // X, Y, Z are the radius-compensated surface point: the ball centre is p + IJK·ER.
   for (const auto& items : out.data) {
-    auto x = ippdme::number_of(items, "X"), y = ippdme::number_of(items, "Y"), z = ippdme::number_of(items, "Z");
-    auto n = ippdme::vector_of(items, "IJK");
-    auto er = ippdme::number_of(items, "ER");
-    if (!(x && y && z)) continue;
-    if (!n || !er || !(n->norm() > 0.5))
-      throw Protocol("probe: the PtMeas report lacks IJK() or ER(), which it was asked for: the ball centre cannot be rebuilt");
+    if (!ippdme::find_call(items, "X")) continue;
     TouchResult r_out;
     r_out.tip_id = active().id;
-    r_out.centre = ours(Vec3(*x, *y, *z) + n->normalized() * *er);
+    r_out.centre = ours(reported_centre(items, "probe"));
     r_out.travel_mm = (r_out.centre - p.start).norm();
     const auto clock = ippdme::number_of(items, "Clock");
     r_out.t_s = clock ? *clock : host_clock();
+    const Vec3 retracted = theirs(r_out.centre) - d * std::max(0.0, p.retract_mm);
     {
       std::lock_guard lock(mutex_);
-      server_radii_.at(active_) = *er;
+      reported_ = retracted;
     }
     // I++ has no minimum travel: the driver judges it, and never reports such a touch.
     if (r_out.travel_mm < std::max(p.min_travel_mm, 1e-6))
@@ -732,6 +858,28 @@ TouchResult IppDmeCmm::do_probe(const ProbeMove& p) {
     return r_out;
   }
   throw Protocol("probe: PtMeas ended without a point report");
+}
+
+Vec3 IppDmeCmm::reported_centre(const Items& items, const char* what) const {
+  // X, Y, Z are the radius-compensated surface point: the ball centre is (X, Y, Z) + IJK·ER, with ER
+  // the radius the server compensated with. An ER that is not its tool's radius is a report we
+  // cannot read (ER(-1000), a diameter for a radius): refused, never learnt.
+  const auto x = ippdme::number_of(items, "X"), y = ippdme::number_of(items, "Y"), z = ippdme::number_of(items, "Z");
+  const auto n = ippdme::vector_of(items, "IJK");
+  const auto er = ippdme::number_of(items, "ER");
+  if (!(x && y && z) || !n || !er || !(n->norm() > 0.5))
+    throw Protocol(std::string(what) + ": the PtMeas report \"" + ippdme::format_terms(items) +
+                   "\" lacks X(), Y(), Z(), IJK() or ER(), which were asked for: the ball centre cannot be rebuilt");
+  double radius = 0;
+  {
+    std::lock_guard lock(mutex_);
+    radius = server_radii_.at(active_);
+  }
+  if (!(std::abs(*er - radius) <= kRadiusToleranceMm))
+    throw Protocol(std::string(what) + ": the PtMeas report has ER(" + ippdme::format_number(*er) + "), but tool \"" +
+                   tool_of(active().id) + "\" compensates with the tip's " + ippdme::format_number(radius) +
+                   " mm radius (ball_radius_mm in the machine description); the touch is not used");
+  return Vec3(*x, *y, *z) + n->normalized() * *er;
 }
 
 void IppDmeCmm::do_stop() {

@@ -30,8 +30,10 @@ struct IppDmeSettings {
   std::map<std::string, std::string> tools;
   double connect_timeout_s = 2;     // "timeouts": {"connect_s", "response_s", "motion_s"}
   double response_timeout_s = 2;    // an acknowledgement, and a transaction that does not move
-  double motion_timeout_s = 600;    // Home, GoTo, PtMeas from sending to their end
-  double move_report_s = 0.05;      // OnMoveReportE's period: status() while a motion runs
+  // Home, GoTo and PtMeas wait as long as their path takes (motion_bound_s); motion_s, when set,
+  // caps that bound: 0 is no cap.
+  double motion_timeout_s = 0;
+  double move_report_s = 0.1;       // OnMoveReportE's Time: at least 0.1 s (I++ DME 1.4.3 §6.3.2.7)
   int connect_attempts = 4;
   double connect_backoff_s = 0.05;  // doubled after each failed attempt
   std::string protocol_log;         // a file for every line with a time stamp; empty: none
@@ -78,6 +80,8 @@ class IppDmeCmm : public CmmDriver {
     std::vector<std::vector<ippdme::Term>> data;
     std::vector<ippdme::ServerError> warnings;
     std::optional<ippdme::ServerError> error;
+    // Ended unanswered by another transaction's severity ≥ 2 error (§6.2.5): "00012 (GoTo)".
+    std::string ended_by;
   };
   using Items = std::vector<ippdme::Term>;
   struct Outcome {
@@ -89,12 +93,19 @@ class IppDmeCmm : public CmmDriver {
   // One transaction: sent once the previous command is acknowledged, waited for to its end. A
   // severity ≥ 2 error is cleared (ClearAllErrors) and thrown as its HAL fault; an e-stop is not
   // cleared (reset() does), a stop's abort is cleared by the stopping thread.
-  Outcome transact(Kind kind, const std::string& method, Items args, const char* what);
-  std::shared_ptr<Transaction> send(Kind kind, const std::string& method, const Items& args, const char* what);
+  // A motion waits up to bound_s (its motion_bound_s()); the others response_s.
+  Outcome transact(Kind kind, const std::string& method, Items args, const char* what, double bound_s = 0);
+  // `daemon`: OnMoveReportE, whose reports follow under its tag once it has ended.
+  std::shared_ptr<Transaction> send(Kind kind, const std::string& method, const Items& args, const char* what,
+                                    bool daemon = false);
   Outcome wait(const std::shared_ptr<Transaction>& tx, double timeout_s, const char* what, const std::string& method);
   [[noreturn]] void fail(const ippdme::ServerError& e, const char* what, const std::string& method);
+  [[noreturn]] void fail_unanswered(const Transaction& tx, const char* what);
+  bool server_homed(const char* what);
   void clear_errors(const char* what);
   void on_line(const std::string& line);
+  void end_pending_locked(const ippdme::Reply& cause);  // with mutex_ held
+  void start_move_reports();
   // Reads and hands out what has come, waiting up to max_wait for it; with io_mutex_ held.
   void pump(std::chrono::milliseconds max_wait);
   // Until ready() (checked under mutex_), the link goes down or out of step, or timeout_s: false then.
@@ -108,6 +119,14 @@ class IppDmeCmm : public CmmDriver {
   void set_prop(const std::string& name, double value, double& cache, const char* what);
   ippdme::Tag next_tag(bool event);
   Vec3 query_position(std::optional<double>* clock);
+  // How long a motion may take: its path at the speed and acceleration it runs with, doubled, plus
+  // response_s and kMotionSlackS; capped by motion_s when set.
+  double motion_bound_s(double length_mm, double speed_mm_s) const;
+  Vec3 last_position() const;  // the last report, Get or motion end (server frame)
+  void go_to(const Vec3& target, const char* what);  // target in the server's frame
+  double home_bound_s() const;
+  // The ball centre of a PtMeas report, or a Protocol fault naming what is wrong with it.
+  Vec3 reported_centre(const Items& items, const char* what) const;
 
   const description::StylusTip& active() const;
   std::string tool_of(const std::string& tip_id) const;

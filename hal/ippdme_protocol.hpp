@@ -85,34 +85,45 @@ struct Reply {
 std::optional<Reply> parse_reply(std::string_view line);  // nullopt: not a well-formed server line
 std::string format_reply(const Reply& reply);             // no CRLF
 
-// Error codes. The ones the issue and the spec's text name are marked (spec); the others are our
-// choice where we could not check the spec (docs/ippdme.md lists them as assumptions).
-inline constexpr int kErrorBufferFull = 0,           // a line over kMaxLineChars
-    kErrorIllegalTag = 1,                            //
-    kErrorNoSpace = 2,                               // no space after the tag
-    kErrorTransactionAborted = 3,                    // a pending transaction ended by AbortE or an error
-    kErrorIllegalCharacter = 4,                      // outside ASCII 32–126
-    kErrorProtocol = 5,                              // the line does not parse
-    kErrorUnknownCommand = 6,                        //
-    kErrorTagInUse = 7,                              // the tag of an open transaction
-    kErrorSessionStarted = 8,                        // a second StartSession (spec)
-    kErrorNoSession = 9,                             // a command before StartSession
-    kErrorEStop = 500,                               // (spec)
-    kErrorUnsupported = 501,                         // older servers: GetDMEVersion (spec)
-    kErrorBadArguments = 502,                        //
-    kErrorOutOfRange = 504,                          // SetProp clamps with a warning (spec)
-    kErrorNotHomed = 509,                            //
-    kErrorToolNotFound = 510,                        //
-    kErrorUseClearAllErrors = 514,                   // after AbortE or a severity ≥ 2 error (spec)
-    kErrorNoTouch = 1003,                            // (spec)
-    kErrorSurfaceNotFound = 1006,                    // (spec)
-    kErrorOutOfVolume = 1008,                        // (spec)
-    kErrorMachineLimit = 2500,                       // (spec)
-    kErrorCollision = 2504;                          // (spec)
+// The error list of I++ DME 1.4.3 §8.2: the number, the default severity class (§8.1) and the text
+// a server must send with it. Only the entries either side of the wire uses are named here.
+inline constexpr int kErrorBufferFull = 0,      // a line over kMaxLineChars
+    kErrorIllegalTag = 1,                       // a malformed tag, or the tag of an open transaction
+    kErrorNoSpace = 2,                          // no space at column 6
+    kErrorTransactionAborted = 6,               // a pending transaction ended by AbortE or an error (§6.2.5)
+    kErrorIllegalCharacter = 7,                 // outside ASCII 32–126
+    kErrorProtocol = 8,                         // a second StartSession (§6.3.1); a line that does not parse
+    kErrorEStop = 500,                          //
+    kErrorUnsupported = 501,                    // a method the server does not have (GetDMEVersion, §6.3.1.14)
+    kErrorIncorrectArguments = 502,             //
+    kErrorOutOfRange = 504,                     // SetProp outside its range: a warning (§6.3.1.11)
+    kErrorArgumentNotRecognized = 505,          //
+    kErrorIllegalCommand = 507,                 // NIST's server: a motion before Home
+    kErrorBadContext = 508,                     //
+    kErrorBadArgument = 509,                    //
+    kErrorBadProperty = 510,                    // OnMoveReportE with Time < 0.1 (§6.3.2.7)
+    kErrorProcessing = 511,                     //
+    kErrorNoDaemons = 512,                      // StopAllDaemons with none running: a warning
+    kErrorNoSuchDaemon = 513,                   // StopDaemon of a tag that runs none
+    kErrorUseClearAllErrors = 514,              // anything but the error methods in an error state
+    kErrorDaemonExists = 515,                   // a second OnMoveReportE
+    kErrorMachineInError = 1000,                //
+    kErrorIllegalTouch = 1001,                  //
+    kErrorNoTouch = 1003,                       //
+    kErrorHome = 1005,                          //
+    kErrorSurfaceNotFound = 1006,               //
+    kErrorOutOfVolume = 1008,                   //
+    kErrorToolNotFound = 1502,                  // ChangeTool of a name the server does not have
+    kErrorToolNotCalibrated = 2000,             //
+    kErrorMachineLimit = 2500,                  //
+    kErrorCollision = 2504;                     //
 
-std::string error_text(int code);  // the server's text for a code
+// §8.2's text and default severity for a code; "Error <n>" and 3 for one the list does not have.
+std::string error_text(int code);
+int default_severity(int code);
 // The HAL fault a server error stands for: 0500 EStop, 1003/1006 NoContact, 1008 SoftLimit,
-// 2500 HardLimit, 2504 EarlyTrigger, 0509 NotHomed, 0003 Aborted, anything else Protocol.
+// 2500 HardLimit, 2504 EarlyTrigger, 0006 Aborted, anything else Protocol (0507 is "Illegal
+// command", which a server may say for more than a missing Home: the driver decides with IsHomed).
 FaultKind fault_from_error(int code);
 
 }  // namespace cmm::hal::ippdme

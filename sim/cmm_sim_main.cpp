@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   int port = 0;
   double time_scale = -1;
   bool print_map = false, grbl_pty = false;
-  std::string rtu_device, grbl_device, ippdme_log_file;
+  std::string rtu_device, grbl_device, ippdme_log_file, ippdme_pending = "answer";
   int rtu_baud = 115200, ippdme_port = -1;
   app.add_option("--config", config_file, "simulator config JSON (docs/hal.md); default: the built-in machine")
       ->check(CLI::ExistingFile);
@@ -47,6 +47,11 @@ int main(int argc, char** argv) {
       app.add_option("--ippdme", ippdme_port, "also serve I++ DME on this TCP port of --host; 0 picks a free one (ippdme in the ready line)")
           ->check(CLI::Range(0, 65535));
   app.add_option("--ippdme-log", ippdme_log_file, "append every I++ DME line received and sent to this file")
+      ->needs(ippdme_option);
+  app.add_option("--ippdme-pending-on-error", ippdme_pending,
+                 "what becomes of queued I++ transactions after a severity >= 2 error: answer (0006 and %, as the "
+                 "specification) or drop (no answer, as NIST's test-suite server)")
+      ->check(CLI::IsMember({"answer", "drop"}))
       ->needs(ippdme_option);
   app.add_flag("--print-modbus-map", print_map, "print the register map as Markdown and exit");
   CLI11_PARSE(app, argc, argv);
@@ -76,8 +81,9 @@ int main(int argc, char** argv) {
     if (!ippdme_log_file.empty()) ippdme_log = std::make_unique<cmm::hal::ProtocolLog>(ippdme_log_file);
     std::unique_ptr<cmm::sim::IppDmeServer> ippdme;
     if (ippdme_port >= 0)
-      ippdme = std::make_unique<cmm::sim::IppDmeServer>(machine, config.faults, cmm::sim::IppDmeEndpoint{host, ippdme_port},
-                                                        ippdme_log.get());
+      ippdme = std::make_unique<cmm::sim::IppDmeServer>(
+          machine, config.faults, cmm::sim::IppDmeEndpoint{host, ippdme_port}, ippdme_log.get(),
+          cmm::sim::IppDmeOptions{ippdme_pending == "drop" ? cmm::sim::PendingOnError::drop : cmm::sim::PendingOnError::answer});
     // A side that fails while serving says so and ends cmm-sim, rather than terminating it.
     auto serving = [](auto& server, const char* side) {
       return std::thread([&server, side] {

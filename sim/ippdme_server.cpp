@@ -30,7 +30,7 @@ namespace {
 using SteadyClock = std::chrono::steady_clock;
 constexpr int kPollMs = 20;                                // how soon serve() sees shutdown()
 constexpr auto kReportTick = std::chrono::milliseconds(10);  // the move-report daemon's look at the machine
-constexpr double kMinReportPeriodS = 0.01;
+constexpr double kMinReportPeriodS = 0.1;  // §6.3.2.7: at most 10 reports a second, Time ≥ 0.1
 constexpr double kMinPositive = 0.001;  // what a property with an open lower bound 0 is clamped up to
 
 enum class Queue { normal, fast };
@@ -85,10 +85,16 @@ double clamp_to(const Range& r, double v) {
   return v;
 }
 
-// A command's arguments that do not fit it: answered 0502 after the ack.
+// A command's arguments that do not fit it: answered after the ack, 0502 unless the specification
+// names another error for the case (0510 for a bad OnMoveReportE property).
 class ArgumentError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit ArgumentError(const std::string& what, int code = ipp::kErrorIncorrectArguments)
+      : std::runtime_error(what), code_(code) {}
+  int code() const { return code_; }
+
+ private:
+  int code_;
 };
 
 // Error texts are "strings" on the wire: printable ASCII, no quote (the grammar has no escapes),
@@ -140,7 +146,8 @@ ipp::Reply error_of(Tag tag, int severity, int code, const std::string& method, 
   return r;
 }
 ipp::Reply aborted_reply(const std::string& method, Tag tag) {
-  return error_of(tag, 2, ipp::kErrorTransactionAborted, method, ipp::error_text(ipp::kErrorTransactionAborted));
+  return error_of(tag, ipp::default_severity(ipp::kErrorTransactionAborted), ipp::kErrorTransactionAborted, method,
+                  ipp::error_text(ipp::kErrorTransactionAborted));
 }
 
 // The line corrupt_reply_at_command sends instead: its marker replaced and its end cut off, so no
@@ -194,7 +201,7 @@ int code_of(hal::FaultKind kind) {
     case hal::FaultKind::soft_limit: return ipp::kErrorOutOfVolume;
     case hal::FaultKind::early_trigger: return ipp::kErrorCollision;
     case hal::FaultKind::hard_limit: return ipp::kErrorMachineLimit;
-    case hal::FaultKind::not_homed: return ipp::kErrorNotHomed;
+    case hal::FaultKind::not_homed: return ipp::kErrorIllegalCommand;
     case hal::FaultKind::aborted: return ipp::kErrorTransactionAborted;
     case hal::FaultKind::no_contact: return ipp::kErrorNoTouch;
     case hal::FaultKind::estop: return ipp::kErrorEStop;
@@ -211,8 +218,13 @@ struct IppDmeServer::Link {
 };
 
 IppDmeServer::IppDmeServer(SimulatedMachine& machine, const FaultInjection& faults, const IppDmeEndpoint& endpoint,
-                           hal::ProtocolLog* log)
-    : machine_(machine), faults_(faults), log_(log), description_(machine.info()), link_(std::make_unique<Link>()) {
+                           hal::ProtocolLog* log, IppDmeOptions options)
+    : machine_(machine),
+      faults_(faults),
+      log_(log),
+      options_(options),
+      description_(machine.info()),
+      link_(std::make_unique<Link>()) {
   const std::string where = endpoint.host + " port " + std::to_string(endpoint.port);
   try {
     asio::ip::tcp::resolver resolver(link_->io);
@@ -382,19 +394,26 @@ void IppDmeServer::take_line(std::string_view line) {
     return refuse_locked(e->tag.value_or(ipp::kServerTag), "", e->code, ipp::error_text(e->code) + ": " + e->text);
   const ipp::Command& c = std::get<ipp::Command>(parsed);
   const CommandInfo* info = find_command(c.name);
-  if (!info) return refuse_locked(c.tag, c.name, ipp::kErrorUnknownCommand, ipp::error_text(ipp::kErrorUnknownCommand));
+  if (!info) return refuse_locked(c.tag, c.name, ipp::kErrorUnsupported, ipp::error_text(ipp::kErrorUnsupported));
   const bool fast = info->queue == Queue::fast;
   if (c.tag == ipp::kServerTag || c.tag.event != fast)
     return refuse_locked(c.tag, c.name, ipp::kErrorIllegalTag,
                          ipp::error_text(ipp::kErrorIllegalTag) + ": " + c.name +
                              (fast ? " is a fast-queue command, its tag E0001-E9999" : " takes a tag 00001-99999"));
-  if (tag_open_locked(c.tag)) return refuse_locked(c.tag, c.name, ipp::kErrorTagInUse, ipp::error_text(ipp::kErrorTagInUse));
+  if (tag_open_locked(c.tag))
+    return refuse_locked(c.tag, c.name, ipp::kErrorIllegalTag, ipp::error_text(ipp::kErrorIllegalTag) + ": " +
+                         ipp::format_tag(c.tag) + " is the tag of an open transaction", false);
   if (!session_open_ && c.name != "StartSession")
-    return refuse_locked(c.tag, c.name, ipp::kErrorNoSession, ipp::error_text(ipp::kErrorNoSession));
+    return refuse_locked(c.tag, c.name, ipp::kErrorProtocol, ipp::error_text(ipp::kErrorProtocol) + ": StartSession first");
   if (session_open_ && c.name == "StartSession")
-    return refuse_locked(c.tag, c.name, ipp::kErrorSessionStarted, ipp::error_text(ipp::kErrorSessionStarted));
-  if (error_state_ && !fast && c.name != "ClearAllErrors" && c.name != "StartSession")
-    return refuse_locked(c.tag, c.name, ipp::kErrorUseClearAllErrors, ipp::error_text(ipp::kErrorUseClearAllErrors));
+    return refuse_locked(c.tag, c.name, ipp::kErrorProtocol,
+                         ipp::error_text(ipp::kErrorProtocol) + ": a session is active; EndSession first");
+  if (error_state_ && !fast && c.name != "ClearAllErrors" && c.name != "StartSession") {
+    send_locked(reply_of(c.tag, ReplyKind::ack));
+    error_locked(c.tag, ipp::default_severity(ipp::kErrorUseClearAllErrors), ipp::kErrorUseClearAllErrors, c.name,
+                 ipp::error_text(ipp::kErrorUseClearAllErrors));
+    return send_locked(reply_of(c.tag, ReplyKind::done));
+  }
 
   int number = 0;
   if (info->counted) {
@@ -418,81 +437,91 @@ void IppDmeServer::take_line(std::string_view line) {
 
 void IppDmeServer::run_fast_locked(const ipp::Command& c) {
   const auto ack = [&] { send_locked(reply_of(c.tag, ReplyKind::ack)); };
-  const auto done = [&](Tag tag) { send_locked(reply_of(tag, ReplyKind::done)); };
+  const auto done = [&] { send_locked(reply_of(c.tag, ReplyKind::done)); };
   try {
     if (c.name == "AbortE") {
       if (!c.args.empty()) throw ArgumentError("AbortE takes no arguments");
-      machine_.stop();  // a controlled stop: the position and homing are kept
-      if (current_ && !current_->ended) end_locked(*current_, aborted_reply(current_->method, current_->tag));
-      enter_error_state_locked();  // the queued ones, and only ClearAllErrors from now on
+      // §6.3.1.5: acknowledged, the running and pending transactions aborted, then its own `%`.
       ack();
-      return done(c.tag);
+      machine_.stop();  // a controlled stop: the position and homing are kept
+      if (current_ && !current_->ended) abort_locked(*current_);
+      enter_error_state_locked(true);
+      return done();
     }
     if (c.name == "GetErrStatusE") {
       if (!c.args.empty()) throw ArgumentError("GetErrStatusE takes no arguments");
       ack();
       send_locked(reply_of(c.tag, ReplyKind::data, {ipp::call_term("ErrStatus", {flag_term(error_state_)})}));
-      return done(c.tag);
+      return done();
     }
     if (c.name == "GetPropE") {
       std::vector<Term> items = read_properties_locked(c.args);
       ack();
       send_locked(reply_of(c.tag, ReplyKind::data, std::move(items)));
-      return done(c.tag);
+      return done();
     }
-    if (c.name == "OnMoveReportE") {
-      Daemon d;
-      d.tag = c.tag;
-      for (const Term& t : c.args) {
-        if (t.text == "Time" && t.kind == Term::Kind::call) {
-          const double s = number_in(t);
-          if (!(s > 0)) throw ArgumentError("Time(s) needs s > 0, not " + shortest(s));
-          d.every_s = std::max(s, kMinReportPeriodS);
-        } else if (t.text == "Dis" && t.kind == Term::Kind::call) {
-          const double mm = number_in(t);
-          if (!(mm >= 0)) throw ArgumentError("Dis(d) needs d >= 0, not " + shortest(mm));
-          d.beyond_mm = mm;
-        } else if (t.kind == Term::Kind::call && t.args.empty() && (axis_index(t.text) >= 0 || t.text == "Clock") &&
-                   std::find(d.axes.begin(), d.axes.end(), t.text) == d.axes.end()) {
-          d.axes.push_back(t.text);
-        } else {
-          throw ArgumentError("OnMoveReportE takes Time(s), Dis(d), X(), Y(), Z(), Clock(), not " + ipp::format_term(t));
-        }
-      }
-      if (std::none_of(d.axes.begin(), d.axes.end(), [](const std::string& a) { return a != "Clock"; }))
-        d.axes.insert(d.axes.begin(), {"X", "Y", "Z"});
-      d.id = ++daemons_;
-      ack();
-      if (daemon_) done(daemon_->tag);  // one daemon at a time: the new one replaces it
-      daemon_ = d;
-      report_wake_.notify_all();
-      return;
-    }
-    if (c.name == "StopDaemon") {
-      const bool word = c.args.size() == 1 && (c.args[0].kind == Term::Kind::name || c.args[0].kind == Term::Kind::string);
-      const auto tag = word ? ipp::parse_tag(c.args[0].text) : std::nullopt;
-      if (!tag || !tag->event) throw ArgumentError("StopDaemon takes the daemon's tag, as in StopDaemon(E0001)");
-      if (!daemon_ || !(daemon_->tag == *tag)) throw ArgumentError("no daemon runs on tag " + ipp::format_tag(*tag));
-      ack();
-      done(daemon_->tag);
-      daemon_.reset();
-      report_wake_.notify_all();
-      return done(c.tag);
-    }
-    if (c.name == "StopAllDaemons") {
-      if (!c.args.empty()) throw ArgumentError("StopAllDaemons takes no arguments");
-      ack();
-      if (daemon_) done(daemon_->tag);
-      daemon_.reset();
-      report_wake_.notify_all();
-      return done(c.tag);
-    }
+    if (c.name == "OnMoveReportE") return start_daemon_locked(c);
+    return stop_daemon_locked(c);
   } catch (const ArgumentError& e) {
     // Accepted, then refused: the arguments are the command's business, not the line's.
     ack();
-    error_locked(c.tag, 2, ipp::kErrorBadArguments, c.name, ipp::error_text(ipp::kErrorBadArguments) + ": " + e.what());
-    return enter_error_state_locked();
+    error_locked(c.tag, ipp::default_severity(e.code()), e.code(), c.name, ipp::error_text(e.code()) + ": " + e.what());
+    done();
+    if (ipp::default_severity(e.code()) >= 2) enter_error_state_locked();
   }
+}
+
+void IppDmeServer::start_daemon_locked(const ipp::Command& c) {
+  Daemon d;
+  d.tag = c.tag;
+  for (const Term& t : c.args) {
+    if (t.text == "Time" && t.kind == Term::Kind::call) {
+      const double s = number_in(t);
+      if (!(s >= kMinReportPeriodS))
+        throw ArgumentError("Time(" + shortest(s) + "): at least 0.1 s, at most 10 reports a second", ipp::kErrorBadProperty);
+      d.every_s = s;
+    } else if (t.text == "Dis" && t.kind == Term::Kind::call) {
+      const double mm = number_in(t);
+      if (!(mm > 0)) throw ArgumentError("Dis(" + shortest(mm) + "): a distance above 0", ipp::kErrorBadProperty);
+      d.beyond_mm = mm;
+    } else if (t.kind == Term::Kind::call && t.args.empty() && (axis_index(t.text) >= 0 || t.text == "Clock") &&
+               std::find(d.axes.begin(), d.axes.end(), t.text) == d.axes.end()) {
+      d.axes.push_back(t.text);
+    } else {
+      throw ArgumentError("OnMoveReportE takes Time(s), Dis(d), X(), Y(), Z(), Clock(), not " + ipp::format_term(t),
+                          ipp::kErrorBadProperty);
+    }
+  }
+  if (daemon_)
+    throw ArgumentError("a daemon runs on " + ipp::format_tag(daemon_->tag) + "; StopDaemon or StopAllDaemons first",
+                        ipp::kErrorDaemonExists);
+  if (std::none_of(d.axes.begin(), d.axes.end(), [](const std::string& a) { return a != "Clock"; }))
+    d.axes.insert(d.axes.begin(), {"X", "Y", "Z"});
+  d.id = ++daemons_;
+  // Complete at once: the reports that follow carry its tag (§6.2.4's example).
+  send_locked(reply_of(c.tag, ReplyKind::ack));
+  send_locked(reply_of(c.tag, ReplyKind::done));
+  daemon_ = d;
+  report_wake_.notify_all();
+}
+
+void IppDmeServer::stop_daemon_locked(const ipp::Command& c) {
+  if (c.name == "StopDaemon") {
+    const bool word = c.args.size() == 1 && (c.args[0].kind == Term::Kind::name || c.args[0].kind == Term::Kind::string);
+    const auto tag = word ? ipp::parse_tag(c.args[0].text) : std::nullopt;
+    if (!tag || !tag->event) throw ArgumentError("StopDaemon takes the daemon's tag, as in StopDaemon(E0001)");
+    if (!daemon_ || !(daemon_->tag == *tag))
+      throw ArgumentError("no daemon runs on tag " + ipp::format_tag(*tag), ipp::kErrorNoSuchDaemon);
+  } else if (!c.args.empty()) {
+    throw ArgumentError("StopAllDaemons takes no arguments");
+  }
+  send_locked(reply_of(c.tag, ReplyKind::ack));
+  if (!daemon_)
+    error_locked(c.tag, ipp::default_severity(ipp::kErrorNoDaemons), ipp::kErrorNoDaemons, c.name,
+                 ipp::error_text(ipp::kErrorNoDaemons));
+  daemon_.reset();  // no report follows this command's `%` (§6.3.1.4)
+  report_wake_.notify_all();
+  send_locked(reply_of(c.tag, ReplyKind::done));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -520,27 +549,26 @@ void IppDmeServer::execute(const Transaction& tx) {
   try {
     run_normal(tx);
   } catch (const ArgumentError& e) {
-    reply_error(2, ipp::kErrorBadArguments, ipp::error_text(ipp::kErrorBadArguments) + ": " + e.what());
+    reply_error(e.code(), ipp::error_text(e.code()) + ": " + e.what());
   } catch (const hal::EStop&) {
     // The event first, so a client hears of the e-stop whatever it is waiting for.
     std::lock_guard lock(mutex_);
     if (tx.connection != connection_) return;
     const std::string text = ipp::error_text(ipp::kErrorEStop);
     report_end_of_motion_locked();
-    send_locked(error_of(ipp::kServerTag, 3, ipp::kErrorEStop, tx.method, text));
-    if (current_ && !current_->ended) end_locked(*current_, error_of(tx.tag, 3, ipp::kErrorEStop, tx.method, text));
-    enter_error_state_locked();
+    send_locked(error_of(ipp::kServerTag, ipp::default_severity(ipp::kErrorEStop), ipp::kErrorEStop, tx.method, text));
+    if (current_ && !current_->ended) fail_locked(*current_, ipp::kErrorEStop, text);
   } catch (const hal::Fault& f) {
     const int code = code_of(f.kind());
-    if (code == ipp::kErrorTransactionAborted) return reply_error(2, code, ipp::error_text(code));
+    if (code == ipp::kErrorTransactionAborted) return reply_error(code, ipp::error_text(code));
     // The machine's message without its kind's name ("SoftLimit: "): the code says that.
     std::string_view detail = f.what();
     if (const std::string kind = std::string(hal::to_string(f.kind())) + ": "; detail.starts_with(kind))
       detail.remove_prefix(kind.size());
-    reply_error(2, code, ipp::error_text(code) + ": " + std::string(detail));
+    reply_error(code, ipp::error_text(code) + ": " + std::string(detail));
   } catch (const std::exception& e) {
     // The machine refused a value the grammar let through (a non-finite target, say).
-    reply_error(2, ipp::kErrorBadArguments, ipp::error_text(ipp::kErrorBadArguments) + ": " + e.what());
+    reply_error(ipp::kErrorIncorrectArguments, ipp::error_text(ipp::kErrorIncorrectArguments) + ": " + e.what());
   }
 }
 
@@ -562,9 +590,9 @@ void IppDmeServer::run_normal(const Transaction& tx) {
   if (m == "EndSession") {
     no_arguments();
     {
+      // §6.3.1.2: no daemon survives the session.
       std::lock_guard lock(mutex_);
-      if (current_ && !current_->ended && daemon_) {
-        send_locked(reply_of(daemon_->tag, ReplyKind::done));
+      if (current_ && !current_->ended) {
         daemon_.reset();
         report_wake_.notify_all();
       }
@@ -602,7 +630,7 @@ void IppDmeServer::run_normal(const Transaction& tx) {
     const std::string& id = args[0].text;
     const auto tips = machine_.info().tips;
     if (std::none_of(tips.begin(), tips.end(), [&](const auto& t) { return t.id == id; }))
-      return reply_error(2, ipp::kErrorToolNotFound,
+      return reply_error(ipp::kErrorToolNotFound,
                          ipp::error_text(ipp::kErrorToolNotFound) + ": no tool " + id + " (EnumTools lists them)");
     machine_.select_tip(id);
     return reply_done();
@@ -801,7 +829,8 @@ void IppDmeServer::report_loop() {
     const bool every = d.every_s && s.moving && now - last_time >= std::chrono::duration<double>(*d.every_s);
     if (s.moving) end_reported_ = false;
     const bool ended = was_moving && !s.moving && !end_reported_;  // unless the worker has reported it
-    const bool moved = d.beyond_mm && (s.position - last).norm() > *d.beyond_mm;
+    const bool moved = d.beyond_mm && (s.position - last).norm() > *d.beyond_mm &&
+                       now - last_time >= std::chrono::duration<double>(kMinReportPeriodS);
     was_moving = s.moving;
     if (every || ended || moved) {
       send_locked(reply_of(d.tag, ReplyKind::data, position_terms(d.axes, s)));
@@ -856,9 +885,19 @@ void IppDmeServer::error_locked(Tag tag, int severity, int code, const std::stri
   send_locked(error_of(tag, severity, code, method, text));
 }
 
-void IppDmeServer::refuse_locked(Tag tag, const std::string& method, int code, const std::string& text) {
-  error_locked(tag, 2, code, method, text);
+void IppDmeServer::refuse_locked(Tag tag, const std::string& method, int code, const std::string& text, bool complete) {
+  // A line we could not take is an error the client must clear, whatever §8.2's default (0000's is
+  // 0); §8.1 lets a server adapt the severity.
+  error_locked(tag, std::max(2, ipp::default_severity(code)), code, method, text);
+  if (complete && !(tag == ipp::kServerTag)) send_locked(reply_of(tag, ReplyKind::done));
   enter_error_state_locked();
+}
+
+void IppDmeServer::fail_locked(Transaction& tx, int code, const std::string& text) {
+  const int severity = ipp::default_severity(code);
+  if (tx.connection == connection_) send_locked(error_of(tx.tag, severity, code, tx.method, text), tx.command > 0);
+  end_locked(tx, reply_of(tx.tag, ReplyKind::done));
+  if (severity >= 2) enter_error_state_locked();
 }
 
 void IppDmeServer::end_locked(Transaction& tx, ipp::Reply reply) {
@@ -869,10 +908,22 @@ void IppDmeServer::end_locked(Transaction& tx, ipp::Reply reply) {
   send_line_locked(std::move(line), tx.command > 0);
 }
 
-void IppDmeServer::enter_error_state_locked() {
+void IppDmeServer::enter_error_state_locked(bool aborting) {
   error_state_ = true;
-  for (Transaction& tx : queue_) end_locked(tx, aborted_reply(tx.method, tx.tag));
+  const bool answer = aborting || options_.pending_on_error == PendingOnError::answer;
+  for (Transaction& tx : queue_) {
+    if (!answer) {
+      tx.ended = true;
+      continue;
+    }
+    abort_locked(tx);
+  }
   queue_.clear();
+}
+
+void IppDmeServer::abort_locked(Transaction& tx) {
+  if (tx.connection == connection_) send_locked(aborted_reply(tx.method, tx.tag), tx.command > 0);
+  end_locked(tx, reply_of(tx.tag, ReplyKind::done));
 }
 
 bool IppDmeServer::tag_open_locked(Tag tag) const {
@@ -907,14 +958,11 @@ void IppDmeServer::report_end_of_motion_locked() {
   send_locked(reply_of(daemon_->tag, ReplyKind::data, position_terms(daemon_->axes, machine_.status())));
 }
 
-void IppDmeServer::reply_error(int severity, int code, const std::string& text) {
+void IppDmeServer::reply_error(int code, const std::string& text) {
   std::lock_guard lock(mutex_);
   if (!current_ || current_->ended) return;
-  const ipp::Reply r = error_of(current_->tag, severity, code, current_->method, text);
-  if (severity < 2) return send_locked(r, current_->command > 0);
   report_end_of_motion_locked();
-  end_locked(*current_, r);
-  enter_error_state_locked();
+  fail_locked(*current_, code, text);
 }
 
 void IppDmeServer::write_line(const std::string& line, std::uint64_t connection) {

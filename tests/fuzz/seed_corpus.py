@@ -174,7 +174,7 @@ put("daemon_config", "grbl-tokens.json", json.dumps(dict(cmmd, machine={"driver"
     machine_description=machine, plate=plate)))
 put("daemon_config", "ippdme.json", json.dumps(dict(cmmd, machine={"driver": "ippdme", "host": "10.0.0.7", "port": 1294,
     "tool": "Probe_A", "tools": {"T1": "Probe_A"}, "timeouts": {"connect_s": 2, "response_s": 2, "motion_s": 600},
-    "move_report_s": 0.05, "protocol_log": "ippdme.log", "machine": machine})))
+    "move_report_s": 0.1, "protocol_log": "ippdme.log", "machine": machine})))
 
 # --- job requests and JSON-RPC lines after docs/api.md --------------------------------------------
 given = {"corners": corners["corners"], "plate": plate}

@@ -1,10 +1,12 @@
 // The I++ DME client against a scripted server: the traps real controllers set (errors of every
 // kind, report fields in another order, clamped properties, an unsolicited e-stop, a dropped
 // connection, an older server without GetDMEVersion) and the approach ↔ IJK mapping, line by line.
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <thread>
 
 #include <gmock/gmock.h>
@@ -20,10 +22,11 @@ namespace {
 using ::testing::HasSubstr;
 using Commands = std::optional<std::vector<std::string>>;
 namespace ipp = ippdme;
+using ipp::Term;
 
 nlohmann::json block(int port) {
   return {{"driver", "ippdme"}, {"port", port}, {"machine", description::to_json(description::default_machine())},
-          {"timeouts", {{"response_s", 1}, {"motion_s", 5}}}, {"connect_attempts", 1}};
+          {"timeouts", {{"response_s", 1}}}, {"connect_attempts", 1}};
 }
 
 struct Connected {
@@ -56,6 +59,19 @@ TEST(IppDmeSettings, ReadsItsBlockAndNamesEveryBadKey) {
   EXPECT_EQ(s.port, 1294);
   EXPECT_EQ(s.tools.at("T1"), "Probe_A");
   EXPECT_EQ(s.motion_timeout_s, 120);
+  EXPECT_EQ(s.move_report_s, 0.1);
+  EXPECT_EQ(ippdme_settings_from_json({{"machine", "config/machine.json"}}, CMMD_SOURCE_DIR).motion_timeout_s, 0)
+      << "no cap by default: each motion's bound follows from its path";
+  try {
+    // §6.3.2.7: at most 10 move reports a second; NIST's server refuses Time(0.05) with 0510.
+    ippdme_settings_from_json({{"move_report_s", 0.05}, {"machine", "config/machine.json"}}, CMMD_SOURCE_DIR);
+    FAIL() << "move_report_s 0.05 taken";
+  } catch (const description::FieldError& e) {
+    std::string all;
+    for (const auto& line : e.lines()) all += line + "\n";
+    EXPECT_THAT(all, HasSubstr("/move_report_s"));
+    EXPECT_THAT(all, HasSubstr("at least 0.1 s"));
+  }
   try {
     ippdme_settings_from_json({{"port", 0}, {"tools", {{"T9", "X"}}}, {"timeouts", {{"respnse_s", 1}}}});
     FAIL() << "no FieldError";
@@ -79,10 +95,19 @@ TEST(IppDmeCmm, ConnectsWithASessionAndReadsTheServerBack) {
   EXPECT_EQ(c.server.count("SetCoordSystem"), 1);
   EXPECT_EQ(c.server.count("OnMoveReportE"), 1);
   // The scripted server is a real controller: no Clock(); the driver asked once, cleared, went on.
+  // StopAllDaemons' warning 0512 (none running) needs no clearing (§8.1).
   EXPECT_EQ(c.server.count("ClearAllErrors"), 1);
+  EXPECT_EQ(c.server.count("StopAllDaemons"), 1);
+  std::size_t stop_all = lines.size(), daemon = lines.size();
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (lines[i].find("StopAllDaemons") != std::string::npos) stop_all = i;
+    if (lines[i].find("OnMoveReportE") != std::string::npos) daemon = i;
+  }
+  EXPECT_LT(stop_all, daemon) << "the daemon is started before the old ones are stopped";
   for (const auto& line : lines) {
     if (line.find("OnMoveReportE") != std::string::npos) {
       EXPECT_EQ(line[0], 'E') << line;
+      EXPECT_THAT(line, HasSubstr("OnMoveReportE(Time(0.100000000), X(), Y(), Z())"));
     }
     if (line.find("SetCoordSystem") != std::string::npos) {
       EXPECT_THAT(line, HasSubstr("(MachineCsy)"));
@@ -174,7 +199,7 @@ TEST(IppDmeCmm, ReportFieldsAreReadByNameInAnyOrder) {
   Connected c;
   c.server.script([](const ipp::Command& c) -> Commands {
     if (c.name == "PtMeas")
-      return std::vector<std::string>{"&", "# ER(0.998000000), IJK(0, 0, 1), Z(44.002), Y(300.001), X(199.999)", "%"};
+      return std::vector<std::string>{"&", "# ER(1.0000004), IJK(0, 0, 1), Z(43.9999996), Y(300.001), X(199.999)", "%"};
     return std::nullopt;
   });
   TouchResult r = c.cmm.probe(down_at(Vec3(200, 300, 50)));
@@ -212,12 +237,13 @@ TEST(IppDmeCmm, ServerErrorsAreTheirFaultsAndAreCleared) {
     int code;
     FaultKind kind;
   };
+  // The machine is homed (IsHomed(1)): its 0507 "Illegal command" is no missing Home.
   for (const Case& k : {Case{1008, FaultKind::soft_limit}, Case{2500, FaultKind::hard_limit},
-                        Case{2504, FaultKind::early_trigger}, Case{509, FaultKind::not_homed}, Case{1234, FaultKind::protocol}}) {
+                        Case{2504, FaultKind::early_trigger}, Case{507, FaultKind::protocol}, Case{1234, FaultKind::protocol}}) {
     c.server.script([&](const ipp::Command& cmd) -> Commands {
       char code[8];
       std::snprintf(code, sizeof code, "%04d", k.code);
-      if (cmd.name == "GoTo") return std::vector<std::string>{"&", std::string("! Error(2, ") + code + ", GoTo, \"refused\")"};
+      if (cmd.name == "GoTo") return std::vector<std::string>{"&", std::string("! Error(3, ") + code + ", GoTo, \"refused\")", "%"};
       return std::nullopt;
     });
     const int clears = c.server.count("ClearAllErrors");
@@ -231,6 +257,14 @@ TEST(IppDmeCmm, ServerErrorsAreTheirFaultsAndAreCleared) {
     EXPECT_EQ(c.server.count("ClearAllErrors"), clears + 1) << "error " << k.code << " was not cleared";
     c.cmm.enable();
   }
+  // A warning (severity 0/1) is no error: the transaction goes on to its `%`, nothing is cleared.
+  c.server.script([](const ipp::Command& cmd) -> Commands {
+    if (cmd.name == "GoTo") return std::vector<std::string>{"&", "! Error(1, 0504, GoTo, \"Argument out of range\")", "%"};
+    return std::nullopt;
+  });
+  const int clears = c.server.count("ClearAllErrors");
+  c.cmm.move({Vec3(300, 300, 300), 0});
+  EXPECT_EQ(c.server.count("ClearAllErrors"), clears);
   // A search that finds nothing: NoContact, or an empty result when asked.
   c.server.script([](const ipp::Command& cmd) -> Commands {
     if (cmd.name == "PtMeas") return std::vector<std::string>{"&", "! Error(2, 1003, PtMeas, \"No touch\")"};
@@ -323,6 +357,170 @@ TEST(IppDmeCmm, TheProtocolLogHasEveryLineWithItsTimeAndDirection) {
   std::getline(in, line);
   EXPECT_THAT(line, ::testing::EndsWith(" <- 00001 &"));
   std::filesystem::remove(file);
+}
+
+// A motion refused with 0507 while the machine says it is not homed is NotHomed, as NIST's server
+// refuses a GoTo before Home.
+TEST(IppDmeCmm, IllegalCommandBeforeHomeIsNotHomed) {
+  testing::ScriptedIppDmeServer server;
+  std::atomic<bool> homed{false};
+  server.script([&](const ipp::Command& cmd) -> Commands {
+    if (cmd.name == "IsHomed") return std::vector<std::string>{"&", homed ? "# IsHomed(1)" : "# IsHomed(0)", "%"};
+    if (cmd.name == "GoTo" && !homed)
+      return std::vector<std::string>{"&", "! Error(3, 0507, GoTo, \"Illegal command\")", "%"};
+    if (cmd.name == "Home") homed = true;
+    return std::nullopt;
+  });
+  IppDmeCmm cmm;
+  cmm.configure(block(server.port()));
+  cmm.connect();
+  cmm.enable();
+  EXPECT_FALSE(cmm.status().homed);
+  EXPECT_THROW(cmm.move({Vec3(300, 300, 300), 0}), NotHomed);
+  EXPECT_EQ(server.count("ClearAllErrors"), 2);  // the Clock() probe's, and this one's
+  cmm.enable();
+  cmm.home();
+  cmm.move({Vec3(300, 300, 300), 0});
+}
+
+// NIST's server refuses OnMoveReportE(Time(0.05)) with 0510 and drops the Get queued behind it
+// without a word: a driver that sent Time < 0.1 and then waited for that Get timed out and
+// reconnected for ever.
+TEST(IppDmeCmm, ConnectsToAServerThatEnforcesTheMoveReportLimit) {
+  testing::ScriptedIppDmeServer server;
+  std::atomic<bool> in_error{false};
+  server.script([&](const ipp::Command& cmd) -> Commands {
+    if (cmd.name == "ClearAllErrors") {
+      in_error = false;
+      return std::nullopt;
+    }
+    if (in_error) return std::vector<std::string>{};  // pending: never answered
+    if (cmd.name == "OnMoveReportE") {
+      const Term* time = ipp::find_call(cmd.args, "Time");
+      if (!time || time->args.empty() || time->args[0].number < 0.1) {
+        in_error = true;
+        return std::vector<std::string>{"&", "! Error(3, 0510, OnMoveReportE, \"Bad property\")", "%"};
+      }
+    }
+    return std::nullopt;
+  });
+  IppDmeCmm cmm;
+  cmm.configure(block(server.port()));
+  cmm.connect();
+  EXPECT_EQ(cmm.status().lifecycle, Lifecycle::connected);
+  EXPECT_EQ(server.count("StartSession"), 1);
+}
+
+// §6.2.5: a severity ≥ 2 error aborts every pending transaction. The specification's server answers
+// each 0006 and `%`; NIST's answers none. Either way the driver waits for none: a query queued
+// behind a failing GoTo ends with the GoTo's error, and the session goes on without a reconnect.
+class IppDmePendingOnError : public ::testing::TestWithParam<bool> {};
+
+TEST_P(IppDmePendingOnError, AQueryQueuedBehindAFailingMotionEndsWithItsError) {
+  const bool answered = GetParam();
+  Connected c;
+  std::mutex tags_mutex;
+  std::string goto_tag;
+  c.server.script([&](const ipp::Command& cmd) -> Commands {
+    const std::string tag = ipp::format_tag(cmd.tag);
+    if (cmd.name == "GoTo") {
+      std::lock_guard lock(tags_mutex);
+      goto_tag = tag;
+      return std::vector<std::string>{"&"};  // running, until ChangeTool comes
+    }
+    if (cmd.name != "ChangeTool") return std::nullopt;
+    std::string running;
+    {
+      std::lock_guard lock(tags_mutex);
+      running = goto_tag;
+    }
+    c.server.push(tag + " &");
+    c.server.push(running + " ! Error(3, 1008, GoTo, \"Target position out of machine volume\")");
+    c.server.push(running + " %");
+    if (!answered) return std::vector<std::string>{};
+    return std::vector<std::string>{"! Error(2, 0006, ChangeTool, \"Transaction aborted (Use ClearAllErrors To Continue)\")", "%"};
+  });
+  auto motion = std::async(std::launch::async, [&] { c.cmm.move({Vec3(300, 300, 300), 0}); });
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (c.server.count("GoTo") == 0 && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+  ASSERT_EQ(c.server.count("GoTo"), 1);
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    c.cmm.select_tip("T2");
+    ADD_FAILURE() << "a ChangeTool the server aborted succeeded";
+  } catch (const Protocol& e) {
+    EXPECT_THAT(e.what(), HasSubstr("ChangeTool(\"T2\")\" was never run"));
+    EXPECT_THAT(e.what(), HasSubstr("(GoTo, error 1008: Target position out of machine volume)"));
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(900)) << "waited for the response timeout";
+  EXPECT_THROW(motion.get(), SoftLimit);
+  EXPECT_EQ(c.cmm.status().lifecycle, Lifecycle::connected);
+  EXPECT_EQ(c.cmm.status().tip_id, "T1");
+  c.server.script(nullptr);
+  c.cmm.enable();
+  c.cmm.move({Vec3(300, 300, 290), 0});
+  EXPECT_EQ(c.server.count("StartSession"), 1) << "reconnected";
+  EXPECT_EQ(c.server.count("ClearAllErrors"), 2);  // the Clock() probe's, and the GoTo's
+}
+
+INSTANTIATE_TEST_SUITE_P(ServerAnswers, IppDmePendingOnError, ::testing::Values(true, false),
+                         [](const ::testing::TestParamInfo<bool>& info) { return info.param ? "Spec" : "Nist"; });
+
+// ER is the radius the server compensated with; anything but its tool's radius is a report the
+// driver cannot read. Refused without learning it: the next PtMeas aims as before, no reconnect.
+TEST(IppDmeCmm, AnErThatIsNotTheToolsRadiusIsRefusedAndNeverLearnt) {
+  Connected c;
+  const std::string ptmeas_line = "PtMeas(X(200.000000000), Y(300.000000000), Z(44.000000000), IJK(";
+  for (const std::string& er : {std::string("ER(-1000)"), std::string("ER(1.3)"), std::string("ER(1.0011)")}) {
+    c.server.script([&](const ipp::Command& cmd) -> Commands {
+      if (cmd.name == "PtMeas") return std::vector<std::string>{"&", "# X(200), Y(300), Z(44), IJK(0, 0, 1), " + er, "%"};
+      return std::nullopt;
+    });
+    try {
+      c.cmm.probe(down_at(Vec3(200, 300, 50)));
+      ADD_FAILURE() << er << " taken";
+    } catch (const Protocol& e) {
+      EXPECT_THAT(e.what(), HasSubstr(er.substr(0, er.size() - 1)));  // "ER(-1000" of ER(-1000.000000000)
+      EXPECT_THAT(e.what(), HasSubstr("1.000000000 mm radius"));
+    }
+    EXPECT_THAT(c.server.received().back(), HasSubstr(ptmeas_line)) << "aimed elsewhere after " << er;
+    c.cmm.enable();
+  }
+  c.server.script(nullptr);
+  TouchResult r = c.cmm.probe(down_at(Vec3(200, 300, 50)));
+  EXPECT_THAT(c.server.received().back(), HasSubstr(ptmeas_line));
+  EXPECT_LT((r.centre - Vec3(200, 300, 45)).norm(), 1e-9);
+  EXPECT_EQ(c.server.count("StartSession"), 1);
+}
+
+// A motion waits as long as its path takes, not a fixed 600 s: a silent controller during a 10 mm
+// search at 5 mm/s (2.4 s with the retract) is a Timeout after twice that plus response_s and a few s.
+TEST(IppDmeCmm, ASilentServerDuringASearchTimesOutWithinItsPathsBound) {
+  Connected c;
+  c.server.script([](const ipp::Command& cmd) -> Commands {
+    if (cmd.name == "PtMeas") return std::vector<std::string>{"&"};
+    return std::nullopt;
+  });
+  hal::ProbeMove p = down_at(Vec3(200, 300, 50));
+  p.speed_mm_s = 5;
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_THROW(c.cmm.probe(p), Timeout);
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_GT(waited, 2 * 2.4);
+  EXPECT_LT(waited, 12);
+  EXPECT_THROW(c.cmm.status(), StateError);  // its answer may still come: the link is down until connect()
+}
+
+// motion_s caps the bound when it is shorter.
+TEST(IppDmeCmm, MotionSCapsAMotionsBound) {
+  Connected c(nlohmann::json{{"timeouts", {{"motion_s", 0.5}}}});
+  c.server.script([](const ipp::Command& cmd) -> Commands {
+    if (cmd.name == "GoTo") return std::vector<std::string>{"&"};
+    return std::nullopt;
+  });
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_THROW(c.cmm.move({Vec3(600, 800, 400), 0}), Timeout);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(2));
 }
 
 }  // namespace

@@ -107,7 +107,11 @@ TEST(IppDmeProtocol, MapsErrorCodesOntoHalFaults) {
   EXPECT_EQ(fault_from_error(kErrorOutOfVolume), FaultKind::soft_limit);
   EXPECT_EQ(fault_from_error(kErrorMachineLimit), FaultKind::hard_limit);
   EXPECT_EQ(fault_from_error(kErrorCollision), FaultKind::early_trigger);
-  EXPECT_EQ(fault_from_error(kErrorNotHomed), FaultKind::not_homed);
+  EXPECT_EQ(fault_from_error(kErrorIllegalCommand), FaultKind::protocol);
+  EXPECT_EQ(fault_from_error(kErrorTransactionAborted), FaultKind::aborted);
+  EXPECT_EQ(error_text(kErrorBadProperty), "Bad property");
+  EXPECT_EQ(default_severity(kErrorNoDaemons), 1);
+  EXPECT_EQ(error_text(kErrorToolNotFound), "Tool not found");
   EXPECT_EQ(fault_from_error(kErrorUnsupported), FaultKind::protocol);
   EXPECT_EQ(error_text(kErrorUseClearAllErrors), "Use ClearAllErrors to continue");
   EXPECT_EQ(format_tag({true, 7}), "E0007");

@@ -1,6 +1,7 @@
 // A scripted I++ DME server for the client driver's tests: a loopback TCP listener that answers
 // each command line with what the test's script says (a plain, well-behaved server by default),
-// records every line it received, and can push unsolicited lines or drop the connection. The real
+// records every line it received, and can push unsolicited lines or drop the connection (errors as
+// I++ DME 1.4.3 answers them: `&`, `!`, `%`; a script decides what else to leave unanswered). The real
 // server (cmm-sim --ippdme) is tested on its own and in the conformance suite.
 #pragma once
 
@@ -174,7 +175,9 @@ class ScriptedIppDmeServer {
     if (c.name == "GetDMEVersion") return {"&", "# DMEVersion(\"1.4.3\")", "%"};
     if (c.name == "EnumTools") return {"&", "# \"T1\"", "# \"T2\"", "%"};
     if (c.name == "IsHomed") return {"&", "# IsHomed(1)", "%"};
-    if (c.name == "OnMoveReportE") return {"&"};
+    // §6.3.2.7: the daemon's command completes at once, its reports follow under its tag.
+    if (c.name == "OnMoveReportE") return {"&", "%"};
+    if (c.name == "StopAllDaemons") return {"&", "! Error(1, 0512, StopAllDaemons, \"No daemons are active\")", "%"};
     if (c.name == "Get") {
       // A real controller knows no Clock(): cmm-sim's extension is refused.
       if (ipp::find_call(c.args, "Clock")) return {"&", "! Error(2, 0502, Get, \"Incorrect arguments\")"};

@@ -110,20 +110,24 @@ struct GrblPath {
 
 // I++ DME: the client driver against cmm-sim's I++ server on loopback, as against a commercial
 // controller. The server reports no travel box or tips, so the driver's config carries the machine's.
+// `pending_on_error`: cmm-sim's answer to the transactions queued behind an error, "answer" as the
+// specification or "drop" as NIST's test-suite server.
 struct IppDmePath {
   static std::string name() { return "IppDme"; }
-  hal::Cmm& open(const nlohmann::json& config) {
+  hal::Cmm& open(const nlohmann::json& config, const std::string& pending_on_error = "answer") {
     cmm.reset();
     sim.reset();
     const auto file = std::filesystem::path(::testing::TempDir()) / ("cmm-sim-ippdme-" + std::to_string(getpid()) + ".json");
     std::ofstream(file) << config.dump();
-    sim = std::make_unique<testing::ChildProcess>(std::vector<std::string>{
-        CMMD_BINARY_DIR "/sim/cmm-sim", "--config", file.string(), "--port", "0", "--ippdme", "0"});
+    sim = std::make_unique<testing::ChildProcess>(
+        std::vector<std::string>{CMMD_BINARY_DIR "/sim/cmm-sim", "--config", file.string(), "--port", "0", "--ippdme", "0",
+                                 "--ippdme-pending-on-error", pending_on_error});
     const auto ready = nlohmann::json::parse(sim->read_line(60));
     const auto machine = sim::sim_config_from_json(config, CMMD_SOURCE_DIR).machine;
     cmm = std::make_unique<hal::IppDmeCmm>();
+    // move_report_s is the driver's default: 0.1 s, the least I++ DME 1.4.3 §6.3.2.7 allows.
     cmm->configure({{"driver", "ippdme"}, {"port", ready.at("ippdme")},
-                    {"timeouts", {{"response_s", config.value("timeout_s", 5.0)}}}, {"move_report_s", 0.002},
+                    {"timeouts", {{"response_s", config.value("timeout_s", 5.0)}}},
                     {"machine", description::to_json(machine)}});
     cmm->connect();
     cmm->enable();
@@ -456,6 +460,89 @@ TYPED_TEST(CmmConformance, SameSeedSameTouchesOnEveryPath) {
     for (std::size_t i = 0; i < first.size(); ++i)
       EXPECT_LT((touches[i] - first[i]).norm(), 1e-6) << name << " vs " << TypeParam::name() << ", touch " << i;
 }
+
+// The I++ driver against cmm-sim's strict I++ face, answering the transactions queued behind an
+// error as the specification does and dropping them as NIST's server does: one whole session.
+class IppDmeStrictSim : public ::testing::TestWithParam<std::string> {
+ protected:
+  hal::Cmm& open(const nlohmann::json& overrides = nlohmann::json::object()) {
+    nlohmann::json config = base_config();
+    config.merge_patch(overrides);
+    truth_ = std::make_unique<sim::SimulatedMachine>(sim::sim_config_from_json(config, CMMD_SOURCE_DIR));
+    return path_.open(config, GetParam());
+  }
+  IppDmePath path_;
+  std::unique_ptr<sim::SimulatedMachine> truth_;
+};
+
+TEST_P(IppDmeStrictSim, SessionHomeStatusQualificationAndAShortProbingJob) {
+  const Vec3 offset_error(0.003, -0.002, 0.001);
+  hal::Cmm& cmm = open({{"true_tips", {{"T1", {{"ball_radius_mm", 0.999}, {"offset_error", {0.003, -0.002, 0.001}}}}}}});
+  // The set-up (StartSession .. StopAllDaemons, OnMoveReportE(Time(0.1)) .. Get) went through.
+  hal::MachineStatus s = cmm.status();
+  EXPECT_EQ(s.lifecycle, hal::Lifecycle::enabled);
+  EXPECT_FALSE(s.homed);
+  EXPECT_THROW(cmm.move({Vec3(300, 400, 100), 0}), hal::NotHomed);  // the server's 0507, read with IsHomed
+  cmm.enable();
+  cmm.home();
+  s = cmm.status();
+  EXPECT_TRUE(s.homed);
+  EXPECT_LT((s.position - cmm.info().travel_box.max).norm(), 1e-6);
+  const description::TipQualification q = hal::qualify(cmm, "T1");
+  EXPECT_NEAR(q.ball_radius_mm, 0.999, 0.003);
+  EXPECT_LT((q.offset - offset_error).norm(), 0.004);
+  // The job: touches on the block's top and one wall, in our qualified frame.
+  for (auto [x, y] : std::vector<std::pair<double, double>>{{28, 28}, {60, 75}, {80, 47.5}}) {
+    hal::ProbeMove p = CmmConformance<IppDmePath>::top_touch(x, y);
+    const hal::TouchResult r = CmmConformance<IppDmePath>::touch(cmm, p);
+    ASSERT_TRUE(r.contact);
+    EXPECT_NEAR(r.centre.z(), kTop + 0.999, 0.006) << x << ", " << y;
+  }
+  hal::ProbeMove wall = CmmConformance<IppDmePath>::top_touch(0, 0);
+  wall.start = kBlockCorner + Vec3(-6, 47.5, 20);
+  wall.direction = Vec3::UnitX();
+  const hal::TouchResult r = CmmConformance<IppDmePath>::touch(cmm, wall);
+  ASSERT_TRUE(r.contact);
+  EXPECT_NEAR(r.centre.x(), kBlockCorner.x() - 0.999, 0.006);
+  EXPECT_EQ(cmm.status().lifecycle, hal::Lifecycle::enabled);
+}
+
+// A query queued behind a search that fails (1003, severity 2) is aborted by the server: answered
+// 0006 or never. The driver ends it with the search's error at once, and the session goes on.
+TEST_P(IppDmeStrictSim, AQueryQueuedBehindAFailingSearchEndsWithIt) {
+  // Wall time, homing without travel (it starts where it ends): a 10 mm search at 5 mm/s takes 2 s.
+  hal::Cmm& cmm = open({{"time_scale", 1}, {"power_on_position", {700, 900, 450}}});
+  cmm.home();
+  cmm.move({Vec3(690, 890, 440), 0});
+  hal::ProbeMove air;
+  air.start = Vec3(690, 890, 440);  // far above anything: no GoTo first, the PtMeas is the only motion
+  air.direction = -Vec3::UnitZ();
+  air.max_travel_mm = 10;
+  air.speed_mm_s = 5;
+  auto search = std::async(std::launch::async, [&] { return cmm.probe(air); });
+  const auto deadline = Clock::now() + std::chrono::seconds(5);
+  while (!cmm.status().moving && Clock::now() < deadline) std::this_thread::yield();
+  ASSERT_TRUE(cmm.status().moving);
+  const auto t0 = Clock::now();
+  try {
+    cmm.select_tip("T2");
+    ADD_FAILURE() << "a ChangeTool queued behind a failed search ran";
+  } catch (const hal::Protocol& e) {
+    EXPECT_NE(std::string(e.what()).find("was never run"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("error 1003"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(Clock::now() - t0, std::chrono::seconds(4)) << "waited for the response timeout";
+  EXPECT_THROW(search.get(), hal::NoContact);
+  EXPECT_EQ(cmm.status().lifecycle, hal::Lifecycle::connected);  // not dropped: no reconnect needed
+  EXPECT_EQ(cmm.status().tip_id, "T1");
+  cmm.enable();
+  cmm.select_tip("T2");
+  cmm.move({Vec3(690, 890, 430), 0});
+  EXPECT_EQ(cmm.status().tip_id, "T2");
+}
+
+INSTANTIATE_TEST_SUITE_P(PendingOnError, IppDmeStrictSim, ::testing::Values("answer", "drop"),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 }  // namespace
 }  // namespace cmm
