@@ -4,6 +4,8 @@
 #include <chrono>
 #include <thread>
 
+#include "hal/touch_check.hpp"
+
 namespace cmm::hal {
 
 CmmDriver::CmmDriver(std::string machine) : machine_(std::move(machine)) {}
@@ -146,7 +148,7 @@ void CmmDriver::move(const Move& m) {
 }
 
 TouchResult CmmDriver::probe(const ProbeMove& p) {
-  return motion("probe", [&] { return do_probe(p); });
+  return motion("probe", [&] { return checked_touch(p, do_probe(p), machine_); });
 }
 
 void CmmDriver::stop() { do_stop(); }
