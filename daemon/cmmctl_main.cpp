@@ -333,6 +333,11 @@ json job_request(const std::string& model, const CLI::App& submit, double scale,
 
 volatile std::sig_atomic_t interrupted = 0;
 
+// A hal::Fault's message names its kind already ("CommLost: cannot reach …"); another error's does not.
+std::string fault_text(const std::string& kind, const std::string& message) {
+  return message.starts_with(kind + ":") ? message : kind + ": " + message;
+}
+
 std::string position_text(const json& p) {
   return fmt("(%.4f, ", p.at(0).get<double>()) + fmt("%.4f, ", p.at(1).get<double>()) + fmt("%.4f)", p.at(2).get<double>());
 }
@@ -589,8 +594,18 @@ int main(int argc, char** argv) {
         std::cout << s.dump(1) << "\n";
         return 0;
       }
+      const bool up = s.value("link", "?") == "up";
       std::printf("machine  %s, link %s, %s, %s\n", s.value("driver", "?").c_str(), s.value("link", "?").c_str(),
-                  s.value("lifecycle", "?").c_str(), s.value("homed", false) ? "homed" : "not homed");
+                  s.value("lifecycle", "?").c_str(), !up ? "homed unknown" : s.value("homed", false) ? "homed" : "not homed");
+      // A pressed e-stop cannot be read over a link that is down: unknown, never "released".
+      if (const json estop = s.value("estop", json(nullptr)); estop.is_boolean())
+        std::printf("e-stop   %s\n", estop.get<bool>() ? "PRESSED" : "released");
+      else
+        std::printf("e-stop   unknown%s\n", up ? "" : " (the link is down)");
+      const json why_down = s.value("connect_error", json(nullptr));
+      if (why_down.is_object())
+        std::printf("connect  failed %s: %s\n", why_down.value("utc", "?").c_str(),
+                    fault_text(why_down.value("kind", "?"), why_down.value("message", "")).c_str());
       if (s.contains("position") && s["position"].is_array())
         std::printf("position (%.4f, %.4f, %.4f) tip %s\n", s["position"][0].get<double>(), s["position"][1].get<double>(),
                     s["position"][2].get<double>(), s.value("tip", "").c_str());
@@ -604,8 +619,10 @@ int main(int argc, char** argv) {
       if (const json jog = s.value("jog", json(nullptr)); jog.is_object())
         std::printf("jog      %d along %s at %g mm/s\n", jog.value("id", 0), position_text(jog.at("direction")).c_str(),
                     jog.value("speed_mm_s", 0.0));
-      if (!s.value("fault", json(nullptr)).is_null())
-        std::printf("fault    %s: %s\n", s["fault"]["kind"].get<std::string>().c_str(), s["fault"]["message"].get<std::string>().c_str());
+      // While the link is down the fault is the connect error, already printed.
+      if (const json fault = s.value("fault", json(nullptr));
+          fault.is_object() && !(why_down.is_object() && fault.value("message", "") == why_down.value("message", "")))
+        std::printf("fault    %s\n", fault_text(fault.value("kind", "?"), fault.value("message", "")).c_str());
       if (!s.value("job", json(nullptr)).is_null()) print_record(client.call("job.get", {{"job", s["job"]}}));
       return 0;
     }

@@ -29,6 +29,7 @@
 #include "daemon/service_notifier.hpp"
 #include "daemon/station_token.hpp"
 #include "daemon/web_server.hpp"
+#include "geometry/atomic_file.hpp"
 #include "hal/description/json_fields.hpp"
 
 #ifndef CMMD_VERSION
@@ -79,15 +80,15 @@ class MachineMonitor {
         if (const auto lease = machine_.try_lease(MachineLink::kReconnectHolder)) {  // never under a job or a command
           try {
             machine_.bring_up();
-            s = machine_.status_json();
           } catch (const std::exception& e) {
             spdlog::debug("machine not reachable: {}", e.what());
           }
+          s = machine_.status_json();  // up, or down with why: this poll reports the try just made
         }
       const nlohmann::json state = {{"lifecycle", s["lifecycle"]}, {"link", s["link"]}, {"fault", s["fault"]}};
       if (state != last) {
         spdlog::info("machine: {} ({}){}", s["link"].get<std::string>(), s["lifecycle"].get<std::string>(),
-                     s["fault"].is_null() ? "" : ", " + s["fault"]["kind"].get<std::string>());
+                     s["fault"].is_null() ? "" : ", " + s["fault"].value("message", s["fault"].value("kind", "")));
         notify_("machine", "machine.state", state);
         last = state;
       }
@@ -117,6 +118,11 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
   set_up_logging(config.log_level);
   ServiceNotifier notifier;
   std::filesystem::create_directories(config.state_dir);
+  // Before this cmmd writes any state: a cmmd killed mid-write left its temps, no later write reuses them.
+  const geometry::TempSweep swept = geometry::remove_stale_atomic_temps(config.state_dir);
+  if (swept.removed > 0)
+    spdlog::info("removed {} temp file(s) of a write cut short in {}", swept.removed, config.state_dir.string());
+  for (const std::string& problem : swept.problems) spdlog::warn("sweeping temp files: {}", problem);
   if (!config.server.unix_path.empty())
     std::filesystem::create_directories(std::filesystem::path(config.server.unix_path).parent_path());
   const std::string base_dir = config_file.empty() ? "." : config_file.parent_path().string();
@@ -180,8 +186,12 @@ int serve(const std::filesystem::path& config_file, DaemonConfig config, const O
     dashboard.set(dashboard_url(config.server.tcp_bind, web->port(), operator_token));
     spdlog::info("dashboard: {}", *dashboard.url());
   }
-  if (fleet) fleet->start();
   jobs.start();
+  if (fleet) {
+    // After the job store's recovery: its interrupted jobs are announced by no notification.
+    fleet->recall_jobs(jobs.list().at("jobs"));
+    fleet->start();
+  }
   MachineMonitor monitor(machine, jobs, notify, notifier);
 
   asio::signal_set signals(io, SIGINT, SIGTERM, SIGHUP);

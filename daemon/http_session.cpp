@@ -21,7 +21,8 @@ namespace {
 constexpr std::size_t kHeaderLimit = 16 * 1024;  // a request's line and headers; GET carries no body
 
 // Headers on every answer: no type guessing by the browser, no framing by a foreign page, and no
-// Referer carrying a report link's ?token= to wherever the page links.
+// Referer telling the sites a page links to which station and job it came from (no URL here
+// carries a token: a report's is refused in web_routes).
 template <class Response>
 void set_common(Response& response, const http::request<http::empty_body>& request, const char* cache) {
   response.set(http::field::server, "cmmd");
@@ -30,6 +31,13 @@ void set_common(Response& response, const http::request<http::empty_body>& reque
   response.set("X-Frame-Options", "SAMEORIGIN");
   response.set("Referrer-Policy", "no-referrer");
   response.keep_alive(request.keep_alive());
+}
+
+// The token of "Authorization: Bearer <token>"; "" without one.
+std::string bearer_token(const http::request<http::empty_body>& request) {
+  const beast::string_view scheme = "Bearer ", value = request[http::field::authorization];
+  if (value.size() <= scheme.size() || !beast::iequals(value.substr(0, scheme.size()), scheme)) return {};
+  return std::string(value.data() + scheme.size(), value.size() - scheme.size());
 }
 
 // The request's target for a message, cut short: a log or an answer never carries a megabyte of URL.
@@ -157,11 +165,16 @@ void HttpSession::serve_file(const Request& request, const Route& route) {
 }
 
 void HttpSession::serve_report(const Request& request, const Route& route) {
-  // Without tokens in cmmd.json the server is loopback-only and observers need none (as on the WebSocket).
+  // Without tokens in cmmd.json the server is loopback-only and observers need none (as on the
+  // WebSocket). With them, the dashboard gets reports over its authenticated WebSocket (job.report)
+  // and the token comes in a header, which no history, log or printed page keeps.
   if (site_.tokens->any_configured()) {
-    if (route.token.empty())
-      return send_text(request, http::status::unauthorized, "a report needs ?token= with an observer or operator token");
-    const TokenCheck checked = site_.tokens->check(route.token, auth_source("http://" + peer_));
+    const std::string token = bearer_token(request);
+    if (token.empty())
+      return send_text(request, http::status::unauthorized,
+                       "a report needs \"Authorization: Bearer <token>\" with an observer or operator token "
+                       "(the dashboard's Report link opens it over the page's own connection)");
+    const TokenCheck checked = site_.tokens->check(token, auth_source("http://" + peer_));
     if (checked.throttled)
       return send_text(request, http::status::too_many_requests, "too many wrong tokens lately: try again later");
     if (!checked.role || *checked.role < Role::observer) {

@@ -44,7 +44,7 @@ std::optional<planner::InspectionResult> inspect_job(const JobRequest& request, 
   const NominalRequest& n = *request.nominal;
   geometry::TriangleMesh mesh;
   try {
-    mesh = geometry::read_mesh(models.resolve(n.model));
+    mesh = geometry::read_mesh(models.resolve(n.model, "/nominal/model"));
   } catch (const geometry::FileError& e) {
     throw nominal_error(n.model, e.what());
   }

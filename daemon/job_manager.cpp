@@ -239,7 +239,7 @@ void JobManager::worker() {
 nlohmann::json JobManager::submit(const nlohmann::json& params) {
   const JobRequest request = parse_job_request(params, config_);
   models_.resolve(request.model);  // refuse an unknown model now, not when the job comes up
-  if (request.nominal) models_.resolve(request.nominal->model);
+  if (request.nominal) models_.resolve(request.nominal->model, "/nominal/model");
   // Before anything is queued: corners the plate rules out, then a model in the wrong unit or off
   // the plate they give (the second needs the first: it stands the model on those corners).
   check_request_registration(request, config_.description);

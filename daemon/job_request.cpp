@@ -5,6 +5,7 @@
 #include <set>
 
 #include "daemon/client/rpc_error.hpp"
+#include "daemon/model_store.hpp"
 #include "hal/description/json_fields.hpp"
 #include "planner/inspection_scope_json.hpp"
 #include "planner/tolerances_json.hpp"
@@ -24,6 +25,17 @@ void corner_list(JsonFields& list, const char* key, std::vector<int>& ids, std::
     points.push_back(corner.require(key) ? corner.vec3(key, Eigen::Vector3d::Zero()) : Eigen::Vector3d::Zero());
     corner.finish();
   }
+}
+
+// The "model" of `f` (the request's or its nominal's), its text checked here so that a bad one is
+// refused at its own field with the others, before any model is looked up.
+std::string model_ref(JsonFields& f) {
+  if (!f.require("model", "\"sha256:<hex>\" or \"file:<name>\"")) return {};
+  const bool text = f.value().at("model").is_string();  // else f.text notes it
+  std::string ref = f.text("model", "");
+  if (text)
+    if (const std::optional<std::string> problem = model_ref_problem(ref)) f.problem("model", *problem);
+  return ref;
 }
 
 PlateMeasurement plate_measurement(JsonFields& f, const description::Plate& plate) {
@@ -78,11 +90,7 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
   f.known({"model", "name", "scale", "delta_mm", "spacing_mm", "feature_angle_deg", "tolerance_mm", "bin_size_mm",
            "adaptive", "seed", "requalify", "units_checked", "tip", "allow_unqualified_tip", "registration", "nominal", "tolerances",
            "inspect"});
-  if (f.require("model", "\"sha256:<hex>\" or \"file:<name>\"")) {
-    r.model = f.text("model", "");
-    if (params["model"].is_string() && r.model.rfind("sha256:", 0) != 0 && r.model.rfind("file:", 0) != 0)
-      f.problem("model", "must be \"sha256:<hex>\" or \"file:<name>\"");
-  }
+  r.model = model_ref(f);
   r.name = f.text("name", "");
   // A unit conversion (µm, inch, m to mm) lies well inside; the model's size against the travel
   // box is checked when it is loaded, before any work that grows with it.
@@ -109,11 +117,7 @@ JobRequest parse_job_request(const nlohmann::json& params, const DaemonConfig& c
     JsonFields nominal = f.object("nominal");
     if (nominal.value().is_object()) {
       NominalRequest n;
-      if (nominal.require("model", "\"sha256:<hex>\" or \"file:<name>\"")) {
-        n.model = nominal.text("model", "");
-        if (n.model.rfind("sha256:", 0) != 0 && n.model.rfind("file:", 0) != 0)
-          nominal.problem("model", "must be \"sha256:<hex>\" or \"file:<name>\"");
-      }
+      n.model = model_ref(nominal);
       n.scale = nominal.number("scale", 1, 1e-4, 1e4);
       n.scale_given = nominal.has("scale");
       n.placement = nominal.text("placement", "given", {"given", "fit"});

@@ -8,12 +8,9 @@
 #include "hal/description/eigen_json.hpp"
 #include "geometry/atomic_file.hpp"
 #include "hal/fault.hpp"
+#include "hal/utc_time.hpp"
 
 namespace cmm::daemon {
-
-namespace {
-
-}  // namespace
 
 MachineLink::MachineLink(std::unique_ptr<hal::Cmm> cmm, nlohmann::json block, std::string driver,
                          std::filesystem::path touch_file)
@@ -62,20 +59,37 @@ std::function<void()> MachineLink::stop_check() const {
 
 void MachineLink::bring_up() {
   const std::lock_guard lock(bring_up_mutex_);
-  if (!configured_) {
-    cmm_->configure(block_);
-    configured_ = true;
-  }
   bool was_up = true;
   try {
-    (void)cmm_->status();
-  } catch (const std::exception&) {
-    was_up = false;  // not connected (StateError), or the link just broke (CommLost)
+    if (!configured_) {
+      cmm_->configure(block_);
+      configured_ = true;
+    }
+    try {
+      (void)cmm_->status();
+    } catch (const std::exception&) {
+      was_up = false;  // not connected (StateError), or the link just broke (CommLost)
+    }
+    // A no-op for a driver already connected (and status() cannot be asked before connect).
+    cmm_->connect();
+  } catch (const std::exception& e) {
+    nlohmann::json why = fault_json(e);
+    why["utc"] = hal::utc_now();
+    const std::lock_guard error_lock(connect_error_mutex_);
+    connect_error_ = std::move(why);
+    throw;
   }
-  // Both are no-ops for a driver already that far (and status() cannot be asked before connect).
-  cmm_->connect();
+  {
+    const std::lock_guard error_lock(connect_error_mutex_);
+    connect_error_ = nullptr;
+  }
   if (!was_up) ++connections_;
-  cmm_->enable();
+  cmm_->enable();  // a refusal here is no connect error: the link is up and status() reads the machine
+}
+
+nlohmann::json MachineLink::connect_error() const {
+  const std::lock_guard lock(connect_error_mutex_);
+  return connect_error_;
 }
 
 description::TipQualification MachineLink::qualify(const std::string& tip_id, const hal::QualificationOptions& options) {
@@ -96,7 +110,8 @@ std::optional<description::StylusTip> MachineLink::qualified_by_cmmd(const std::
 }
 
 nlohmann::json MachineLink::status_json() {
-  nlohmann::json j = {{"driver", driver_}};
+  const nlohmann::json why_down = connect_error();
+  nlohmann::json j = {{"driver", driver_}, {"connect_error", why_down}};
   try {
     const hal::MachineStatus s = cmm_->status();
     const bool up = s.lifecycle == hal::Lifecycle::connected || s.lifecycle == hal::Lifecycle::enabled;
@@ -104,15 +119,24 @@ nlohmann::json MachineLink::status_json() {
               {"link", up ? "up" : "down"},
               {"homed", s.homed},
               {"moving", s.moving},
-              {"estop", s.estop},
+              {"estop", up ? nlohmann::json(s.estop) : nlohmann::json(nullptr)},
               {"aborted", s.aborted},
               {"position", description::vec3_json(s.position)},
               {"tip", s.tip_id},
               {"t_s", s.t_s},
               {"fault", s.fault ? nlohmann::json{{"kind", hal::to_string(*s.fault)}, {"message", s.fault_message}}
                                 : nlohmann::json(nullptr)}});
+  } catch (const hal::StateError&) {
+    // Not connected. Nothing the machine reports is known, its e-stop least of all (a released one
+    // must not be shown while it may be pressed); the fault is why the last connect failed, not
+    // this refusal to read a status.
+    j.update({{"lifecycle", configured_ ? "configured" : "unconfigured"},
+              {"link", "down"},
+              {"estop", nullptr},
+              {"fault", why_down.is_null() ? nlohmann::json(nullptr)
+                                           : nlohmann::json{{"kind", why_down.at("kind")}, {"message", why_down.at("message")}}}});
   } catch (const std::exception& e) {
-    j.update({{"lifecycle", "unknown"}, {"link", "down"}, {"fault", fault_json(e)}});
+    j.update({{"lifecycle", "unknown"}, {"link", "down"}, {"estop", nullptr}, {"fault", fault_json(e)}});
   }
   j["job"] = nullptr;
   if (const auto h = holder()) j["holder"] = *h;

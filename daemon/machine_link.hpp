@@ -35,8 +35,13 @@ class MachineLink {
               std::filesystem::path touch_file = {});
 
   // Configures once, then connects and enables as far as needed. Throws hal::Fault (CommLost when
-  // the machine cannot be reached) or description::FieldError for a bad driver block.
+  // the machine cannot be reached) or description::FieldError for a bad driver block; what it threw
+  // before the link was made is kept as connect_error().
   void bring_up();
+  // Why the last bring_up() could not make the link: {"kind", "message", "utc"} as fault_json names
+  // the error, with the time it failed. Null before the first try and once a link has been made:
+  // whoever asks for the status while the link is down learns why without reading the log.
+  nlohmann::json connect_error() const;
   // How many times bring_up() found the link down and brought it up: a job compares it to see that
   // the driver reconnected (a controller that restarted may have lost its tip qualifications).
   std::uint64_t connections() const { return connections_.load(); }
@@ -47,10 +52,11 @@ class MachineLink {
   description::TipQualification qualify(const std::string& tip_id, const hal::QualificationOptions& options);
   // The tip as the machine reported it right after cmmd last qualified it (since cmmd started).
   std::optional<description::StylusTip> qualified_by_cmmd(const std::string& tip_id) const;
-  // status() that never throws: a link that is down reads as {"link": "down", "fault": …}.
   // Each tip as the machine reports it: id, active, radius, offset, and its qualification (null: never
   // qualified, or forgotten by a controller that restarted). Empty when the link is down.
   nlohmann::json tips_json();
+  // status() that never throws (machine.status in docs/api.md): a link that is down reads as
+  // {"link": "down", "estop": null, "fault": the connect error, "connect_error": …}.
   nlohmann::json status_json();
   hal::Cmm& cmm() { return *cmm_; }  // motion for the lease holder; status, stop, abort for anyone
   const std::string& driver() const { return driver_; }
@@ -94,8 +100,10 @@ class MachineLink {
   std::unique_ptr<hal::Cmm> cmm_;
   nlohmann::json block_;
   std::string driver_;
-  bool configured_ = false;
+  std::atomic<bool> configured_{false};  // read by status_json while bring_up holds its mutex
   std::mutex bring_up_mutex_;
+  mutable std::mutex connect_error_mutex_;  // not bring_up_mutex_: a connect may try for seconds
+  nlohmann::json connect_error_;
   mutable std::mutex lease_mutex_;
   std::optional<std::string> holder_;
   std::condition_variable released_;

@@ -155,50 +155,68 @@ UploadStatus ModelStore::finish(const std::string& sha, const std::string& ext, 
   return {"sha256:" + sha + ext, size, true};
 }
 
-fs::path ModelStore::resolve(const std::string& ref) const {
-  std::lock_guard lock(mutex_);
+std::optional<std::string> model_ref_problem(const std::string& ref) {
   if (ref.rfind("sha256:", 0) == 0) {
-    // "sha256:<hex>.<ext>" names the format too; plain "sha256:<hex>" is fine while one is stored.
     const std::string name = lowercase(ref.substr(7));
     const std::string sha = name.substr(0, std::min<std::size_t>(64, name.size()));
     const std::string ext = name.substr(sha.size());
-    if (!is_sha256_hex(sha)) throw_invalid_param("/model", "\"" + ref + "\": sha256 must be 64 hex digits");
-    if (!ext.empty()) {
-      if (!known_extension(ext))
-        throw_invalid_param("/model", "\"" + ref + "\": after the digest only " + extension_list() + " may follow");
-      const fs::path file = stored_file(sha, ext);
-      if (file.empty()) throw RpcError(rpc_code::not_found, "no uploaded model " + ref, {{"model", ref}});
-      return file;
-    }
-    const std::vector<std::string> stored = stored_extensions(sha);
-    if (stored.empty()) throw RpcError(rpc_code::not_found, "no uploaded model " + ref, {{"model", ref}});
-    if (stored.size() > 1) {
-      std::string names;
-      for (const std::string& e : stored) names += (names.empty() ? "" : ", ") + ("sha256:" + sha + e);
-      throw_invalid_param("/model", "\"" + ref + "\" was uploaded as " + std::to_string(stored.size()) +
-                                    " formats: name one (" + names + ")");
-    }
-    return stored_file(sha, stored.front());
+    if (!is_sha256_hex(sha)) return "\"" + ref + "\": sha256 must be 64 hex digits";
+    if (!ext.empty() && !known_extension(ext))
+      return "\"" + ref + "\": after the digest only " + extension_list() + " may follow";
+    return std::nullopt;
   }
-  if (ref.rfind("file:", 0) == 0) return resolve_file(ref.substr(5));
-  throw_invalid_param("/model", "\"" + ref + "\" is not a model reference (\"sha256:<hex>\" or \"file:<name>\")");
+  if (ref.rfind("file:", 0) == 0) {
+    const fs::path relative(ref.substr(5));
+    if (relative.empty() || relative.is_absolute()) return ref + ": need a relative name inside models_dir";
+    for (const auto& part : relative)
+      if (part == "..") return ref + ": \"..\" is not allowed";
+    return std::nullopt;
+  }
+  return "\"" + ref + "\" is not a model reference (\"sha256:<hex>\" or \"file:<name>\")";
 }
 
-fs::path ModelStore::resolve_file(const std::string& name) const {
-  const std::string ref = "file:" + name;
-  if (models_dir_.empty()) throw_invalid_param("/model", ref + ": no models_dir is configured");
-  const fs::path relative(name);
-  if (name.empty() || relative.is_absolute()) throw_invalid_param("/model", ref + ": need a relative name inside models_dir");
-  for (const auto& part : relative)
-    if (part == "..") throw_invalid_param("/model", ref + ": \"..\" is not allowed");
+namespace {
+
+[[noreturn]] void throw_not_found(const std::string& field, const std::string& ref, const std::string& message) {
+  throw RpcError(rpc_code::not_found, field + ": " + message, {{"model", ref}, {"path", field}});
+}
+
+}  // namespace
+
+fs::path ModelStore::resolve(const std::string& ref, const std::string& field) const {
+  if (const std::optional<std::string> problem = model_ref_problem(ref)) throw_invalid_param(field, *problem);
+  std::lock_guard lock(mutex_);
+  if (ref.rfind("file:", 0) == 0) return resolve_file(ref, field);
+  // "sha256:<hex>.<ext>" names the format too; plain "sha256:<hex>" is fine while one is stored.
+  const std::string name = lowercase(ref.substr(7));
+  const std::string sha = name.substr(0, 64), ext = name.substr(64);
+  if (!ext.empty()) {
+    const fs::path file = stored_file(sha, ext);
+    if (file.empty()) throw_not_found(field, ref, "no uploaded model " + ref);
+    return file;
+  }
+  const std::vector<std::string> stored = stored_extensions(sha);
+  if (stored.empty()) throw_not_found(field, ref, "no uploaded model " + ref);
+  if (stored.size() > 1) {
+    std::string names;
+    for (const std::string& e : stored) names += (names.empty() ? "" : ", ") + ("sha256:" + sha + e);
+    throw_invalid_param(field, "\"" + ref + "\" was uploaded as " + std::to_string(stored.size()) +
+                                   " formats: name one (" + names + ")");
+  }
+  return stored_file(sha, stored.front());
+}
+
+fs::path ModelStore::resolve_file(const std::string& ref, const std::string& field) const {
+  if (models_dir_.empty()) throw_invalid_param(field, ref + ": no models_dir is configured");
+  const fs::path relative(ref.substr(5));
   std::error_code error;
   const fs::path root = fs::weakly_canonical(models_dir_, error);
-  if (error) throw RpcError(rpc_code::not_found, ref + ": models_dir " + models_dir_.string() + " is unreadable", {{"model", ref}});
+  if (error) throw_not_found(field, ref, ref + ": models_dir " + models_dir_.string() + " is unreadable");
   // Symlinks inside models_dir may point anywhere; what counts is where they lead.
   const fs::path target = fs::weakly_canonical(root / relative, error);
   const auto [root_end, target_it] = std::mismatch(root.begin(), root.end(), target.begin(), target.end());
-  if (error || root_end != root.end()) throw_invalid_param("/model", ref + ": leads out of models_dir");
-  if (!fs::is_regular_file(target)) throw RpcError(rpc_code::not_found, ref + ": no such file in " + root.string(), {{"model", ref}});
+  if (error || root_end != root.end()) throw_invalid_param(field, ref + ": leads out of models_dir");
+  if (!fs::is_regular_file(target)) throw_not_found(field, ref, ref + ": no such file in " + root.string());
   return target;
 }
 

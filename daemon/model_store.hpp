@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,12 @@ struct UploadStatus {
   std::uint64_t received = 0;
   bool complete = false;
 };
+
+// What is wrong with a model reference by its text alone, for the message at its field: not
+// "sha256:<64 hex>" with at most a model extension after it, nor "file:<name>" with a relative name
+// and no "..". Nothing when it may name a model (whether it does is resolve's to say). job.submit's
+// field check and resolve share it.
+std::optional<std::string> model_ref_problem(const std::string& ref);
 
 class ModelStore {
  public:
@@ -48,17 +55,19 @@ class ModelStore {
   // it) and the same chunk may be sent again once there is room.
   UploadStatus upload(const UploadChunk& chunk);
 
-  // The file a job's "model" names: "sha256:<hex><ext>" → the upload in that format, "sha256:<hex>"
-  // → the upload if it is stored in one format only; "file:<name>" → a file under models_dir.
-  // Throws RpcError: invalid_params with data.path "/model" for a malformed ref, a digest stored in
-  // several formats without naming one, an absolute path, "..", or a name whose symlinks lead out
-  // of models_dir; not_found when absent.
-  std::filesystem::path resolve(const std::string& ref) const;
+  // The file a model reference names: "sha256:<hex><ext>" → the upload in that format,
+  // "sha256:<hex>" → the upload if it is stored in one format only; "file:<name>" → a file under
+  // models_dir. `field` is the JSON Pointer of the request field that held `ref` ("/model",
+  // "/nominal/model"): every refusal names it, so a bad nominal is never reported at the model.
+  // Throws RpcError: invalid_params with data.path `field` for what model_ref_problem finds, a
+  // digest stored in several formats without naming one, no models_dir for "file:", or a name whose
+  // symlinks lead out of models_dir; not_found with data {"model", "path": field} when absent.
+  std::filesystem::path resolve(const std::string& ref, const std::string& field = "/model") const;
 
  private:
   std::filesystem::path stored_file(const std::string& sha256_hex, const std::string& extension) const;  // empty if not stored
   std::vector<std::string> stored_extensions(const std::string& sha256_hex) const;
-  std::filesystem::path resolve_file(const std::string& name) const;
+  std::filesystem::path resolve_file(const std::string& ref, const std::string& field) const;
   UploadStatus finish(const std::string& sha256_hex, const std::string& extension, std::uint64_t size);
 
   std::filesystem::path dir_, partial_dir_, models_dir_;

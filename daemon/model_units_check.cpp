@@ -31,18 +31,26 @@ std::optional<Eigen::Isometry3d> plate_in_scan(const JobRequest& request) {
   return planner::fit_plate_pose(request.plate, ids, scan);
 }
 
-// One model file, its points in mm after `scale`, checked; `overridden` keeps a refusal as a note.
-void check_model(const std::filesystem::path& file, double scale, bool overridden, const std::string& what,
-                 const description::TravelBox& travel_box, const description::Plate& plate, const std::optional<Eigen::Isometry3d>& T_S_P,
-                 std::vector<std::string>& notes) {
+// One of the request's models (`field` "/model" or "/nominal/model"), its points in mm after
+// `scale`, checked; `overridden` keeps a refusal as a note. A nominal must be a mesh: its edges are
+// what the job is held to, and a cloud has none (the job would find out only at its result).
+void check_model(const ModelStore& models, const std::string& ref, const std::string& field, double scale, bool overridden,
+                 const description::TravelBox& travel_box, const description::Plate& plate,
+                 const std::optional<Eigen::Isometry3d>& T_S_P, std::vector<std::string>& notes) {
+  const bool nominal = field == "/nominal/model";
+  const std::string what = nominal ? "nominal " : "";
+  const std::filesystem::path file = models.resolve(ref, field);
   geometry::ReadResult read;
   try {
     read = geometry::read_model(file);
   } catch (const std::exception& e) {  // FileError names the file and the line or byte
-    throw RpcError(rpc_code::model_error, what + e.what(), {{"file", file.string()}, {"kind", "unreadable"}});
+    throw RpcError(rpc_code::model_error, what + e.what(), {{"file", file.string()}, {"kind", "unreadable"}, {"path", field}});
   }
   // A raw scan's points before any meshing, a mesh's vertices.
   geometry::PointCloud* cloud = std::get_if<geometry::PointCloud>(&read.model);
+  if (cloud && nominal)
+    throw_invalid_param(field, "\"" + ref + "\" is a point cloud (" + file.filename().string() +
+                                   " has no faces): a nominal must be a mesh, the part as drawn (STL, OBJ, OFF or PLY with faces)");
   geometry::Points& points = cloud ? cloud->points : std::get<geometry::TriangleMesh>(read.model).vertices;
   points *= scale;
   // A model no placement fits in the travel box is the model limits' to refuse, with their message
@@ -62,7 +70,7 @@ void check_model(const std::filesystem::path& file, double scale, bool overridde
   nlohmann::json data = {{"file", file.string()},
                          {"kind", u.factor ? "units" : "off_plate"},
                          {"extent_mm", description::vec3_json(u.extent_mm)},
-                         {"nominal", !what.empty()}};
+                         {"nominal", nominal}};
   if (u.factor) data.update({{"factor", *u.factor}, {"scale", scale * *u.factor}});
   throw RpcError(rpc_code::model_error, u.problem, data);
 }
@@ -73,13 +81,13 @@ std::vector<std::string> check_request_units(const JobRequest& request, const Mo
                                              const description::TravelBox& travel_box) {
   std::vector<std::string> notes;
   const std::optional<Eigen::Isometry3d> T_S_P = plate_in_scan(request);
-  check_model(models.resolve(request.model), request.scale, request.units_checked || request.scale_given, "",
-              travel_box, request.plate, T_S_P, notes);
+  check_model(models, request.model, "/model", request.scale, request.units_checked || request.scale_given, travel_box,
+              request.plate, T_S_P, notes);
   if (request.nominal) {
     // A nominal fitted onto the scan may stand anywhere in its file: only its size is checked then.
     const bool given = request.nominal->placement == "given";
-    check_model(models.resolve(request.nominal->model), request.nominal->scale,
-                request.units_checked || request.nominal->scale_given, "nominal ", travel_box, request.plate,
+    check_model(models, request.nominal->model, "/nominal/model", request.nominal->scale,
+                request.units_checked || request.nominal->scale_given, travel_box, request.plate,
                 given ? T_S_P : std::nullopt, notes);
   }
   return notes;

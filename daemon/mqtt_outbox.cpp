@@ -94,4 +94,37 @@ std::size_t MqttOutbox::size() const {
   return entries_.size();
 }
 
+void RecentJobStates::set(Entry entry) {
+  const int id = entry.id;
+  jobs_.insert_or_assign(id, std::move(entry));
+  trim();
+}
+
+bool RecentJobStates::add_if_unknown(Entry entry) {
+  const int id = entry.id;
+  if (!jobs_.try_emplace(id, std::move(entry)).second) return false;
+  trim();
+  return jobs_.contains(id);  // an ended job older than every one kept is not recent
+}
+
+std::vector<RecentJobStates::Entry> RecentJobStates::entries() const {
+  std::vector<Entry> out;
+  out.reserve(jobs_.size());
+  for (const auto& [id, entry] : jobs_) out.push_back(entry);
+  return out;
+}
+
+void RecentJobStates::trim() {
+  std::size_t ended = 0;
+  for (const auto& [id, entry] : jobs_) ended += entry.ended ? 1 : 0;
+  for (auto it = jobs_.begin(); ended > max_ended_ && it != jobs_.end();) {
+    if (!it->second.ended) {
+      ++it;
+      continue;
+    }
+    it = jobs_.erase(it);
+    --ended;
+  }
+}
+
 }  // namespace cmm::daemon

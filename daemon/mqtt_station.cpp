@@ -3,6 +3,8 @@
 // over the broker leaves one for the next request).
 #include "daemon/mqtt_station.hpp"
 
+#include <optional>
+
 #include <asio/post.hpp>
 #include <asio/thread_pool.hpp>
 #include <spdlog/spdlog.h>
@@ -111,6 +113,50 @@ void MqttStation::on_connected() {
   in_flight_.clear();
   for (const OutboxEntry& entry : outbox_.pending())
     if (const auto mid = client_->publish(entry.message)) in_flight_[*mid] = entry.seq;
+  // The broker may have come back without what it had acknowledged (killed between two saves of
+  // its database). CONNACK's session-present flag cannot tell: cmmd connects with a clean start,
+  // so it is 0 on every connect, lost retained messages or not. So every connect sends them all
+  // again, after the outbox so that each job's latest state is the one retained.
+  for (const RecentJobStates::Entry& job : recent_.entries()) publish_recent(job);
+}
+
+void MqttStation::publish_recent(const RecentJobStates::Entry& job) {
+  MqttMessage m;
+  m.topic = topics_.job(job.id, "state");
+  m.payload = job.payload;
+  m.qos = 1;
+  m.retain = true;
+  client_->publish(m);
+  if (!job.ended) return;
+  m.topic = topics_.job(job.id, "result");
+  client_->publish(m);
+}
+
+void MqttStation::recall_jobs(const json& records) {
+  std::lock_guard lock(mutex_);
+  std::optional<json> held;  // the last job recalled that holds the station (running, paused, interrupted)
+  for (const json& record : records) {
+    try {
+      const int id = record.at("id").get<int>();
+      const std::string state = record.at("state").get<std::string>();
+      const json payload = {{"job", id},
+                            {"state", state},
+                            {"reason", record.at("reason")},
+                            {"verdict", record.value("verdict", json(nullptr))},
+                            {"station", options_.station},
+                            {"time", record.at("updated")}};
+      const RecentJobStates::Entry job{.id = id, .ended = is_end(state), .payload = payload.dump()};
+      if (!recent_.add_if_unknown(job)) continue;
+      publish_recent(job);  // when down (as at start), the connect sends it
+      if (!job.ended && state != "queued") held = json{{"id", id}, {"state", state}};
+    } catch (const json::exception& e) {
+      spdlog::error("MQTT: a job record not recalled ({}): {}", e.what(), record.dump());
+    }
+  }
+  if (held && job_.is_null()) {
+    job_ = *held;
+    publish_status();
+  }
 }
 
 void MqttStation::publish_status() {
@@ -147,6 +193,7 @@ void MqttStation::notify(const std::string& method, const json& params) {
       m.qos = 1;
       m.retain = true;
       send_kept(m);
+      recent_.set({.id = id, .ended = is_end(state), .payload = m.payload});
       if (is_end(state)) {
         m.topic = topics_.job(id, "result");
         send_kept(m);

@@ -1,7 +1,9 @@
 // The station on a fleet's MQTT broker (docs/fleet.md): its retained status with a last will, each
 // job's state, progress and result, and JSON-RPC requests on api/request/<user> answered on the
 // requester's own response topic. States and results go through the on-disk outbox, so a broker
-// that is away loses none of them and never holds up a job.
+// that is away loses none of them and never holds up a job; and every connect publishes again the
+// status and the latest state and result of each recent job, so a broker that lost its retained
+// messages (killed before it saved them) gets them back from the station.
 #pragma once
 
 #include <atomic>
@@ -51,6 +53,10 @@ class MqttStation {
 
   // From cmmd's notification fan-out (any thread): machine.state and job.* become topics.
   void notify(const std::string& method, const nlohmann::json& params);
+  // job.list's records, read once the job store has recovered: the states no notification
+  // announces (the interrupted of a job a crash cut short) become retained topics too. A job a
+  // notification already told of keeps what that said.
+  void recall_jobs(const nlohmann::json& records);
   bool connected() const;
   std::size_t unsent() const { return outbox_.size(); }  // states and results not yet acknowledged
 
@@ -59,6 +65,7 @@ class MqttStation {
   void on_request(const MqttMessage& message);
   void send_kept(const MqttMessage& message);
   void publish_status();  // under mutex_
+  void publish_recent(const RecentJobStates::Entry& job);  // under mutex_; not kept: the next connect sends it again
   void reply(const MqttMessage& request, const std::string& response);
 
   MqttOptions options_;
@@ -72,6 +79,7 @@ class MqttStation {
   mutable std::mutex mutex_;
   nlohmann::json machine_ = nullptr;  // the last machine.state
   nlohmann::json job_ = nullptr;      // {"id", "state"} of the job running, or null
+  RecentJobStates recent_;
   std::map<int, std::uint64_t> in_flight_;  // message id → outbox number
   std::map<int, std::chrono::steady_clock::time_point> last_progress_;
   std::string last_failure_;  // the last reason a connect failed, logged once

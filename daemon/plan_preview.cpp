@@ -105,7 +105,7 @@ void recover(hal::Cmm& cmm) {
 nlohmann::json preview_plan(const nlohmann::json& params, const DaemonConfig& config, const ModelStore& models,
                             const description::MachineDescription* info, const geometry::CancelCheck& cancel) {
   const JobRequest request = parse_job_request(params, config, true);
-  const std::filesystem::path model_file = models.resolve(request.model);
+  const std::filesystem::path model_file = models.resolve(request.model, "/model");
   // What job.submit would refuse, refused before the work: the registration, then the model's unit.
   check_request_registration(request, info ? machine_for_job(config.description, *info) : config.description);
   std::vector<std::string> notes = check_request_units(request, models, config.description.travel_box);

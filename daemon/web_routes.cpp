@@ -27,16 +27,15 @@ Route file(const std::filesystem::path& root, std::string relative, bool web_roo
   return r;
 }
 
-// The value of `key` in a query string ("a=1&token=x"), decoded; "" when absent or malformed.
-std::string query_value(std::string_view query, std::string_view key) {
+// Whether a query string ("a=1&token=x") has `key`, with a value or without.
+bool query_has(std::string_view query, std::string_view key) {
   while (!query.empty()) {
     const std::size_t amp = query.find('&');
     const std::string_view pair = query.substr(0, amp);
     query = amp == std::string_view::npos ? std::string_view() : query.substr(amp + 1);
-    const std::size_t eq = pair.find('=');
-    if (eq != std::string_view::npos && pair.substr(0, eq) == key) return percent_decode(pair.substr(eq + 1)).value_or("");
+    if (pair.substr(0, pair.find('=')) == key) return true;
   }
-  return {};
+  return false;
 }
 
 bool starts_with(std::string_view text, std::string_view prefix) { return text.substr(0, prefix.size()) == prefix; }
@@ -69,10 +68,14 @@ Route route_of(std::string_view target, const WebRoots& roots) {
     int id = 0;
     const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), id);
     if (!digits.empty() && ec == std::errc() && end == digits.data() + digits.size() && digits.front() != '-') {
+      // Refused, not ignored: whoever built such a link learns why it stopped working, and a token
+      // in a URL stays in browser history, proxy logs and a printed page's footer.
+      if (query_has(query, "token"))
+        return bad("a token is never taken in a URL: the dashboard opens reports over its own connection "
+                   "(job.report); a script sends \"Authorization: Bearer <token>\"");
       Route r;
       r.kind = RouteKind::job_report;
       r.job = id;
-      r.token = query_value(query, "token");
       return r;
     }
   }

@@ -23,11 +23,11 @@ struct Route {
   std::string relative;        // file: the decoded path below root
   bool web_root = false;       // file: one of the dashboard's own (Cache-Control: no-cache)
   int job = 0;                 // job_report
-  std::string token;           // job_report: ?token=, decoded ("" when absent)
   std::string problem;         // bad_request: what is wrong, for the 400's text
 };
 
-// `target` as the request line has it ("/lib/three/build/three.module.js", "/jobs/7/report?token=…").
+// `target` as the request line has it ("/lib/three/build/three.module.js", "/jobs/7/report"). A
+// report asked for with ?token= is a bad request.
 Route route_of(std::string_view target, const WebRoots& roots);
 
 }  // namespace cmm::daemon

@@ -2,10 +2,12 @@
 #include "geometry/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <string>
 
 #include "geometry/file_error.hpp"
@@ -36,6 +38,20 @@ std::filesystem::path folder_of(const std::filesystem::path& file) {
   return file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
 }
 
+constexpr std::string_view kTempMarker = ".tmp-";
+
+// Hidden, and per process: two processes writing the same file never share a temp.
+std::filesystem::path temp_for(const std::filesystem::path& file) {
+  std::string name = ".";  // appended piece by piece: GCC 12 -O3's false -Wrestrict (bug 105329)
+  name += file.filename().string();
+  name += kTempMarker;
+  name += std::to_string(::getpid());
+  return folder_of(file) / name;
+}
+
+// EPERM: the process exists, it is only another user's.
+bool process_alive(int pid) { return ::kill(pid, 0) == 0 || errno == EPERM; }
+
 }  // namespace
 
 void sync_folder(const std::filesystem::path& folder) {
@@ -48,11 +64,7 @@ void sync_folder(const std::filesystem::path& folder) {
 }
 
 void write_atomically(const std::filesystem::path& file, std::string_view content, std::optional<unsigned> mode) {
-  std::string name = ".";  // appended piece by piece: GCC 12 -O3's false -Wrestrict (bug 105329)
-  name += file.filename().string();
-  name += ".tmp-";
-  name += std::to_string(::getpid());
-  const std::filesystem::path temp = folder_of(file) / name;
+  const std::filesystem::path temp = temp_for(file);
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, mode.value_or(0644));
   if (fd < 0) fail(file, "cannot create the temp file " + temp.string(), errno);
   // Whatever failed, the temp file goes: a full disk gets its space back and no half file stays.
@@ -113,6 +125,41 @@ void write_chunk(const std::filesystem::path& file, std::uint64_t offset, std::s
   if (!write_all(fd, bytes, offset)) abandon("write", errno);
   if (::fsync(fd) != 0) abandon("fsync", errno);
   ::close(fd);
+}
+
+std::optional<int> atomic_temp_writer(const std::filesystem::path& path) {
+  const std::string name = path.filename().string();
+  const std::size_t marker = name.rfind(kTempMarker);
+  // "." and at least one character of the file's own name before the marker.
+  if (name.empty() || name.front() != '.' || marker == std::string::npos || marker < 2) return std::nullopt;
+  const char* digits = name.data() + marker + kTempMarker.size();
+  const char* end = name.data() + name.size();
+  int pid = 0;
+  const auto [stop, ec] = std::from_chars(digits, end, pid);
+  if (ec != std::errc() || stop != end || digits == end || *digits == '+' || pid <= 0) return std::nullopt;
+  return pid;
+}
+
+TempSweep remove_stale_atomic_temps(const std::filesystem::path& root) {
+  namespace fs = std::filesystem;
+  TempSweep sweep;
+  std::vector<fs::path> stale;
+  std::error_code ec;
+  fs::recursive_directory_iterator it(root, fs::directory_options::skip_permission_denied, ec);
+  for (; !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    const std::optional<int> writer = atomic_temp_writer(it->path());
+    std::error_code type_error;
+    if (!writer || !it->is_regular_file(type_error)) continue;
+    if (*writer == ::getpid() || !process_alive(*writer)) stale.push_back(it->path());
+  }
+  if (ec && ec != std::errc::no_such_file_or_directory)
+    sweep.problems.push_back("cannot list all of " + root.string() + ": " + ec.message());
+  for (const fs::path& temp : stale) {
+    std::error_code removed;
+    if (fs::remove(temp, removed)) ++sweep.removed;
+    else if (removed) sweep.problems.push_back("cannot remove " + temp.string() + ": " + removed.message());
+  }
+  return sweep;
 }
 
 }  // namespace cmm::geometry

@@ -7,6 +7,7 @@ import {JobView3D} from './job_view3d.js';
 import {css, relative_colour, METHOD_COLOURS, NOT_MEASURED, OUTSIDE, REASON_PALETTE, SCAN_SCALE_MM} from './colours.js';
 import {draw_histogram} from './histogram.js';
 import {counts_text, verdict_of} from './verdict.js';
+import {report_click} from './history.js';
 
 let ctx = null;
 let view3d = null;
@@ -16,6 +17,7 @@ const FINAL = new Set(['done', 'failed', 'cancelled']);
 
 export function init(context) {
   ctx = context;
+  $('report-link').addEventListener('click', (e) => report_click(e, current.id));
   ctx.rpc.on('job.state', (p) => {
     if (current && p.job === current.id) refresh();
   });
@@ -110,7 +112,7 @@ function show_record(record) {
   $('job-cancel').hidden = FINAL.has(record.state);
   const link = $('report-link');
   link.hidden = record.state !== 'done';
-  link.href = `/jobs/${record.id}/report${ctx.token ? `?token=${encodeURIComponent(ctx.token)}` : ''}`;
+  link.href = `/jobs/${record.id}/report`;
   show_verdict();
 }
 

@@ -67,6 +67,11 @@ function poll_once() {
   if (ctx.rpc.connected && ctx.rpc.role !== 'none') ctx.rpc.call('machine.status', {}, 10).then(render, () => {});
 }
 
+// A hal fault's message names its kind already ("CommLost: cannot reach …"); another error's does not.
+function fault_text(f) {
+  return f.message && f.message.startsWith(`${f.kind}:`) ? f.message : `${f.kind}: ${f.message}`;
+}
+
 function yes_no(b) { return b === undefined || b === null ? '–' : b ? 'yes' : 'no'; }
 
 function render(s) {
@@ -76,13 +81,24 @@ function render(s) {
     e.textContent = text;
     if (cls !== undefined) e.className = cls;
   };
+  // While the link is down nothing the machine reports is known (a machine.state notification
+  // merged over the last status would otherwise keep showing what it said while up), least of all
+  // its e-stop: unknown, never a green "released".
+  const up = s.link === 'up';
+  const why_down = up ? null : s.connect_error;
   set('m-lifecycle', s.lifecycle || '–');
-  set('m-link', s.link || '–', s.link === 'up' ? 'good' : 'bad');
-  set('m-homed', yes_no(s.homed), s.homed ? 'good' : 'warn');
-  set('m-moving', yes_no(s.moving));
-  set('m-estop', s.estop ? 'PRESSED' : 'released', s.estop ? 'bad' : 'good');
-  set('m-aborted', yes_no(s.aborted), s.aborted ? 'bad' : '');
-  set('m-fault', s.fault ? `${s.fault.kind}: ${s.fault.message}` : 'none', s.fault ? 'bad' : 'good');
+  set('m-link', s.link || '–', up ? 'good' : 'bad');
+  set('m-why-down', why_down ? `connect failed ${why_down.utc}: ${fault_text(why_down)}` : up ? '–' : 'connecting…',
+      why_down ? 'bad' : '');
+  $('m-why-down-row').hidden = up;
+  set('m-homed', up ? yes_no(s.homed) : 'unknown', !up ? 'unknown' : s.homed ? 'good' : 'warn');
+  set('m-moving', up ? yes_no(s.moving) : 'unknown', up ? '' : 'unknown');
+  const estop = up && typeof s.estop === 'boolean' ? s.estop : null;
+  set('m-estop', estop === null ? 'unknown' : estop ? 'PRESSED' : 'released', estop === null ? 'unknown' : estop ? 'bad' : 'good');
+  set('m-aborted', up ? yes_no(s.aborted) : 'unknown', !up ? 'unknown' : s.aborted ? 'bad' : '');
+  // The connect error is the link row's; the fault row repeats it only when it is another one.
+  const fault = s.fault && !(why_down && s.fault.message === why_down.message) ? s.fault : null;
+  set('m-fault', fault ? fault_text(fault) : up ? 'none' : '–', fault ? 'bad' : up ? 'good' : 'unknown');
   set('m-job', s.job === null || s.job === undefined ? 'none' : `job ${s.job}`);
   if (Array.isArray(s.position)) {
     set('m-x', fmt(s.position[0], 3));
@@ -93,11 +109,11 @@ function render(s) {
                      : s.last_jog ? `last jog: ${s.last_jog.reason}` : '–');
   render_tip();
   // The header's summary, on every page.
-  const summary = s.link !== 'up' ? `machine ${s.link || 'unknown'}` : s.estop ? 'E-STOP' : s.fault ? `fault: ${s.fault.kind}`
+  const summary = !up ? `machine ${s.link || 'unknown'}${s.fault ? `: ${s.fault.kind}` : ''}` : s.estop ? 'E-STOP' : s.fault ? `fault: ${s.fault.kind}`
                 : s.job !== null && s.job !== undefined ? `running job ${s.job}` : s.moving ? 'moving' : s.homed ? 'idle' : 'not homed';
   const pill = $('hdr-machine');
   pill.textContent = summary;
-  pill.className = `pill ${s.link !== 'up' || s.estop || s.fault ? 'bad' : s.homed ? 'good' : 'warn'}`;
+  pill.className = `pill ${!up || s.estop || s.fault ? 'bad' : s.homed ? 'good' : 'warn'}`;
 }
 
 // Every tip as the machine reports it, and whether and when it was qualified: a job makes no touch

@@ -1,6 +1,6 @@
 // job.submit's and plan.preview's params: the raw-scan fields (tolerance_mm, bin_size_mm, adaptive), the
-// tips (tip, allow_unqualified_tip) and what to inspect (inspect) read with the one field checker, each
-// bad one refused with its JSON Pointer.
+// tips (tip, allow_unqualified_tip), what to inspect (inspect) and the model references read with the
+// one field checker, each bad one refused with its JSON Pointer.
 #include "daemon/job_request.hpp"
 
 #include <gmock/gmock.h>
@@ -24,6 +24,19 @@ json preview(const json& fields) {
   json params = {{"model", "sha256:" + std::string(64, 'a') + ".pcd"}};
   for (const auto& [key, value] : fields.items()) params[key] = value;
   return params;
+}
+
+// The preview with `patch` is refused as invalid params at `path`, saying `message`.
+void expect_refused(const json& patch, const std::string& path, const std::string& message) {
+  SCOPED_TRACE(patch.dump());
+  try {
+    parse_job_request(preview(patch), config(), true);
+    ADD_FAILURE() << "no error";
+  } catch (const RpcError& e) {
+    EXPECT_EQ(e.code(), rpc_code::invalid_params);
+    EXPECT_EQ(e.data().value("path", ""), path);
+    EXPECT_THAT(e.what(), HasSubstr(message));
+  }
 }
 
 TEST(JobRequestScan, FieldsAreReadWhenGiven) {
@@ -58,17 +71,26 @@ TEST(JobRequestScan, EachBadFieldIsRefusedAtItsPointer) {
       {{{"adaptive", 1}}, "/adaptive", "must be true or false"},
       {{{"tolerance", 0.05}}, "/tolerance", "unknown"},
   };
-  for (const Case& c : cases) {
-    SCOPED_TRACE(c.patch.dump());
-    try {
-      parse_job_request(preview(c.patch), config(), true);
-      ADD_FAILURE() << "no error";
-    } catch (const RpcError& e) {
-      EXPECT_EQ(e.code(), rpc_code::invalid_params);
-      EXPECT_EQ(e.data().value("path", ""), c.path);
-      EXPECT_THAT(e.what(), HasSubstr(c.message));
-    }
-  }
+  for (const Case& c : cases) expect_refused(c.patch, c.path, c.message);
+}
+
+// A bad nominal reference was refused at "/model", the job's other model, or not before the lookup.
+TEST(JobRequestModels, ABadReferenceIsRefusedAtItsOwnField) {
+  const std::string good = "sha256:" + std::string(64, 'b') + ".stl";
+  struct Case {
+    json patch;
+    std::string path, message;
+  };
+  const std::vector<Case> cases = {
+      {{{"nominal", {{"model", "sha256:0123"}}}}, "/nominal/model", "sha256 must be 64 hex digits"},
+      {{{"nominal", {{"model", good + ".exe"}}}}, "/nominal/model", "after the digest only"},
+      {{{"nominal", {{"model", "file:../cad/part.stl"}}}}, "/nominal/model", "\"..\" is not allowed"},
+      {{{"nominal", {{"model", "part.stl"}}}}, "/nominal/model", "is not a model reference"},
+      {{{"nominal", {{"model", 7}}}}, "/nominal/model", "must be a string"},
+      {{{"model", "file:/srv/part.stl"}, {"nominal", {{"model", good}}}}, "/model", "need a relative name"},
+  };
+  for (const Case& c : cases) expect_refused(c.patch, c.path, c.message);
+  EXPECT_EQ(parse_job_request(preview({{"nominal", {{"model", good}}}}), config(), true).nominal->model, good);
 }
 
 TEST(JobRequestTips, AutoAndNoUnqualifiedTipUnlessSaid) {

@@ -285,5 +285,39 @@ TEST(ModelStore, ResolvesFilesInsideModelsDirOnly) {
   rpc_error_of([&] { without.resolve("file:blocks/a.stl"); }, rpc_code::invalid_params);
 }
 
+// A bad nominal was reported at "/model", the job's other model, whatever field held it.
+TEST(ModelStore, EveryRefusalNamesTheFieldThatHeldTheReference) {
+  const fs::path dir = fresh_folder("models-field");
+  fs::create_directories(dir / "library");
+  std::ofstream(dir / "secret.stl") << "outside\n";
+  fs::create_symlink(dir / "secret.stl", dir / "library" / "escape.stl");
+  ModelStore store(dir / "models", dir / "library"), without(dir / "models", "");
+  Upload up;
+  up.name = "part.stl";
+  store.upload(up.chunk(0, up.bytes.size()));
+  up.name = "part.ply";
+  store.upload(up.chunk(0, 0));
+  const std::string field = "/nominal/model";
+  using Refs = std::vector<std::string>;
+  // Malformed, in two formats without naming one, out of models_dir, no reference at all.
+  for (const std::string& ref : Refs{"sha256:xyz", "sha256:" + up.sha + ".exe", "sha256:" + up.sha, "file:../secret.stl",
+                                     "file:escape.stl", "file:", "model.stl"}) {
+    const RpcError e = rpc_error_of([&] { store.resolve(ref, field); }, rpc_code::invalid_params);
+    EXPECT_EQ(e.data().at("path"), field) << ref;
+    EXPECT_THAT(e.what(), ::testing::StartsWith(field + ": ")) << ref;
+  }
+  EXPECT_EQ(rpc_error_of([&] { without.resolve("file:a.stl", field); }, rpc_code::invalid_params).data().at("path"), field);
+  for (const std::string& ref : Refs{"sha256:" + std::string(64, '0'), "sha256:" + up.sha + ".obj", "file:missing.stl"}) {
+    const RpcError e = rpc_error_of([&] { store.resolve(ref, field); }, rpc_code::not_found);
+    EXPECT_EQ(e.data().at("path"), field) << ref;
+    EXPECT_EQ(e.data().at("model"), ref);
+  }
+  // What job.submit's field check finds by the text alone, before any lookup.
+  EXPECT_FALSE(model_ref_problem("sha256:" + up.sha + ".PLY"));
+  EXPECT_FALSE(model_ref_problem("file:blocks/a.stl"));
+  for (const std::string& ref : Refs{"sha256:0123", "sha256:" + up.sha + ".exe", "file:/etc/a.stl", "file:a/../../b.stl", "a.stl"})
+    EXPECT_TRUE(model_ref_problem(ref)) << ref;
+}
+
 }  // namespace
 }  // namespace cmm::daemon

@@ -1,5 +1,6 @@
 // The MQTT outbox keeps job states and results on disk until the broker acknowledges them: across
-// a restart, in order, and without losing one to a file it cannot read.
+// a restart, in order, and without losing one to a file it cannot read; RecentJobStates keeps what
+// every connect publishes again.
 #include "daemon/mqtt_outbox.hpp"
 
 #include <gtest/gtest.h>
@@ -75,6 +76,39 @@ TEST(MqttOutbox, AFolderItCannotWriteStillKeepsTheMessageInMemory) {
   const std::uint64_t seq = outbox.add(message("cmmd/a/jobs/1/result", "{}"));
   ASSERT_EQ(outbox.size(), 1u);
   EXPECT_EQ(outbox.pending().front().seq, seq);
+}
+
+std::vector<int> ids(const RecentJobStates& recent) {
+  std::vector<int> out;
+  for (const RecentJobStates::Entry& e : recent.entries()) out.push_back(e.id);
+  return out;
+}
+
+TEST(RecentJobStates, KeepsEveryUnendedJobAndOnlyTheNewestEndedOnes) {
+  RecentJobStates recent(2);
+  recent.set({.id = 1, .ended = false, .payload = "interrupted"});
+  for (int id = 2; id <= 5; ++id) recent.set({.id = id, .ended = true, .payload = "done"});
+  recent.set({.id = 6, .ended = false, .payload = "probing"});
+  EXPECT_EQ(ids(recent), (std::vector<int>{1, 4, 5, 6}));
+  // Job 1 ends: now it is the oldest ended one, and goes.
+  recent.set({.id = 1, .ended = true, .payload = "cancelled"});
+  EXPECT_EQ(ids(recent), (std::vector<int>{4, 5, 6}));
+  recent.set({.id = 6, .ended = true, .payload = "done"});
+  EXPECT_EQ(ids(recent), (std::vector<int>{5, 6}));
+  EXPECT_EQ(recent.entries().back().payload, "done");
+}
+
+TEST(RecentJobStates, AStateReadBackNeverReplacesOneANotificationGave) {
+  RecentJobStates recent(2);
+  recent.set({.id = 7, .ended = true, .payload = "cancelled"});  // notified between job.list and the recall
+  EXPECT_FALSE(recent.add_if_unknown({.id = 7, .ended = false, .payload = "interrupted"}));
+  EXPECT_TRUE(recent.add_if_unknown({.id = 8, .ended = false, .payload = "interrupted"}));
+  EXPECT_TRUE(recent.add_if_unknown({.id = 6, .ended = true, .payload = "done"}));
+  EXPECT_FALSE(recent.add_if_unknown({.id = 5, .ended = true, .payload = "done"})) << "older than the two kept";
+  const std::vector<RecentJobStates::Entry> entries = recent.entries();
+  ASSERT_EQ(entries.size(), 3u);
+  EXPECT_EQ(entries[1].payload, "cancelled");
+  EXPECT_EQ(entries[2].payload, "interrupted");
 }
 
 }  // namespace

@@ -36,7 +36,23 @@ void make_test_certificates(const std::filesystem::path& folder, const std::stri
   }
 }
 
-BrokerProcess::BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users, bool tls)
+namespace {
+
+// The lines of the shipped broker config that decide what reaches its disk, and when.
+std::string shipped_persistence_lines() {
+  const std::filesystem::path shipped = CMMD_SOURCE_DIR "/config/mosquitto/mosquitto.conf";
+  std::ifstream in(shipped);
+  if (!in) throw std::runtime_error("cannot read " + shipped.string());
+  std::string lines;
+  for (std::string line; std::getline(in, line);)
+    if (line.starts_with("persistence ") || line.starts_with("autosave_")) lines += line + "\n";
+  return lines;
+}
+
+}  // namespace
+
+BrokerProcess::BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users,
+                             BrokerOptions options)
     : folder_(std::move(folder)), port_(free_tcp_port()) {
   std::filesystem::create_directories(folder_);
   const std::filesystem::path passwords = folder_ / "passwd";
@@ -50,12 +66,15 @@ BrokerProcess::BrokerProcess(std::filesystem::path folder, const std::map<std::s
                                             << "password_file " << passwords.string() << "\n"
                                             << "acl_file " << CMMD_SOURCE_DIR << "/config/mosquitto/cmmd.acl\n"
                                             << "listener " << port_ << " 127.0.0.1\n"
-                                            << "persistence false\n"
+                                            << (options.shipped_persistence
+                                                    ? shipped_persistence_lines() + "persistence_location " +
+                                                          folder_.string() + "/\n"
+                                                    : "persistence false\n")
                                             << "max_packet_size 8388608\n"
                                             << "log_dest file " << (folder_ / "mosquitto.log").string() << "\n"
                                             // Started as root it would become "mosquitto", who cannot write here.
                                             << "user " << getpwuid(geteuid())->pw_name << "\n";
-  if (tls) {
+  if (options.tls) {
     make_test_certificates(folder_, "broker");
     std::ofstream(folder_ / "mosquitto.conf", std::ios::app) << "cafile " << tls_ca().string() << "\n"
                                                               << "certfile " << (folder_ / "broker.crt").string() << "\n"

@@ -11,11 +11,19 @@
 
 namespace cmm::testing {
 
+struct BrokerOptions {
+  // The listener takes TLS only, with a certificate for 127.0.0.1 signed by the CA of tls_ca().
+  bool tls = false;
+  // The persistence and autosave lines of config/mosquitto/mosquitto.conf, the database in the
+  // folder. Without: nothing is saved, and each start() begins with no retained message at all.
+  bool shipped_persistence = false;
+};
+
 class BrokerProcess {
  public:
-  // users: name → password; the ACL file is used as docs/fleet.md documents it. With `tls`, the
-  // listener takes TLS only, with a certificate for 127.0.0.1 signed by the CA of tls_ca().
-  BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users, bool tls = false);
+  // users: name → password; the ACL file is used as docs/fleet.md documents it.
+  BrokerProcess(std::filesystem::path folder, const std::map<std::string, std::string>& users,
+                BrokerOptions options = {});
   void start();  // returns once it accepts connections
   void kill9();
   int port() const { return port_; }

@@ -1,9 +1,13 @@
 // A fleet on a real mosquitto (the documented ACL, users with passwords) with two real cmmd stations
 // on the simulator: cmmctl fleet, jobs sent through the broker, token roles, a broker killed in the
-// middle of a job, the last will of a killed station, and what an observer can and cannot read.
+// middle of a job, the last will of a killed station, and what an observer can and cannot read; and
+// what the broker holds after cmmd or the broker itself was killed.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <csignal>
+#include <stdexcept>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -49,6 +53,23 @@ daemon::RpcClient station_client(int broker_port, const std::string& station, co
 json payload(const daemon::MqttMessage& m) { return json::parse(m.payload); }
 
 bool is_topic(const daemon::MqttMessage& m, const std::string& topic) { return m.topic == topic; }
+
+bool is_state(const daemon::MqttMessage& m, const std::string& topic, const std::string& state) {
+  return m.topic == topic && payload(m).value("state", "") == state;
+}
+
+// The broker has acknowledged every state and result: the station's outbox copies are gone. Only
+// the disk shows it, so the folder is looked at until then.
+void wait_until_acknowledged(const testing::CmmdInstance& cmmd, double timeout_s) {
+  const auto outbox = cmmd.folder() / "state" / "mqtt-outbox";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!std::filesystem::is_empty(outbox)) {
+    if (std::chrono::steady_clock::now() > deadline)
+      throw std::runtime_error("the broker did not acknowledge everything in " + outbox.string() + " within " +
+                               std::to_string(timeout_s) + " s");
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+}
 
 class Fleet : public ::testing::Test {
  protected:
@@ -225,11 +246,88 @@ TEST_F(Fleet, AnObserverUnderTheDocumentedAclReadsNoRequestNorReplyOfAnother) {
     EXPECT_NE(m.topic, "cmmd/clients/ops/forged/reply") << "a request published in another user's name was answered";
 }
 
+// A station killed mid-job finds the job interrupted when it starts again, without any job.state
+// notification: the broker must still learn it, or every reader goes on seeing it probing.
+TEST_F(Fleet, AStationKilledMidJobPublishesTheJobInterruptedOnceItIsBack) {
+  auto alpha = station("alpha", testing::timed_sim_block(50));
+  daemon::RpcClient local = alpha->client();
+  const int id = testing::submit_quick_job(local, dir_ / "scan");
+  const std::string state = "cmmd/alpha/jobs/" + std::to_string(id) + "/state";
+  testing::MqttListener viewer(broker_->port(), "viewer", "viewer-pw", {state});
+  viewer.wait_for("probing", [&](const auto& m) { return is_state(m, state, "probing"); }, 120);
+  alpha->kill9();
+  alpha->start();
+  viewer.wait_for("interrupted", [&](const auto& m) { return is_state(m, state, "interrupted"); }, 10);
+
+  // A reader that comes later gets it as the retained state, and the station's status names the job
+  // that holds it.
+  testing::MqttListener later(broker_->port(), "viewer", "viewer-pw", {state, "cmmd/alpha/status"});
+  const daemon::MqttMessage retained = later.wait_for("the retained state", [&](const auto& m) {
+    return is_topic(m, state) && m.retain;
+  }, 5);
+  EXPECT_EQ(payload(retained).at("state"), "interrupted") << retained.payload;
+  const daemon::MqttMessage status = later.wait_for("the retained status", [](const auto& m) {
+    return is_topic(m, "cmmd/alpha/status") && m.retain;
+  }, 5);
+  EXPECT_EQ(payload(status).at("job"), (json{{"id", id}, {"state", "interrupted"}})) << status.payload;
+}
+
+// A broker acknowledges before it saves: killed in between, it comes back without the result, and
+// the station has already dropped its outbox copy. The station publishes it again on reconnecting.
+TEST_F(Fleet, ABrokerBackWithAnEmptyDatabaseGetsTheStatusAndRecentJobsAgainFromTheStation) {
+  auto alpha = station("alpha", testing::sample_sim_block());
+  daemon::RpcClient local = alpha->client();
+  const int id = testing::submit_quick_job(local, dir_ / "scan");
+  testing::wait_for_job(local, id, {"done"}, 120);
+  wait_until_acknowledged(*alpha, 10);
+  broker_->kill9();
+  broker_->start();  // the fixture's broker saves nothing: it is back with no retained message at all
+
+  const std::string jobs = "cmmd/alpha/jobs/" + std::to_string(id) + "/";
+  testing::MqttListener viewer(broker_->port(), "viewer", "viewer-pw", {jobs + "result"});
+  viewer.wait_for("the result published again", [&](const auto& m) { return is_topic(m, jobs + "result"); }, 15);
+  testing::MqttListener later(broker_->port(), "viewer", "viewer-pw", {"cmmd/alpha/status", "cmmd/alpha/jobs/#"});
+  for (const std::string& topic : {jobs + "result", jobs + "state", std::string("cmmd/alpha/status")}) {
+    const daemon::MqttMessage got = later.wait_for("retained " + topic, [&](const auto& m) {
+      return is_topic(m, topic) && m.retain;
+    }, 5);
+    if (topic == "cmmd/alpha/status") {
+      EXPECT_TRUE(payload(got).value("online", false)) << got.payload;
+    } else {
+      EXPECT_EQ(payload(got).at("state"), "done") << topic << ": " << got.payload;
+      EXPECT_EQ(payload(got).at("job"), id) << got.payload;
+    }
+  }
+}
+
+// The second wall: with the shipped config, the broker itself keeps an acknowledged result through
+// a kill -9, for a station that is not there to publish it again.
+TEST(FleetBroker, TheShippedConfigSavesAnAcknowledgedResultBeforeAKill9) {
+  const auto dir = daemon::fresh_folder("fleet-persistence");
+  testing::BrokerProcess broker(dir / "broker", kUsers, {.shipped_persistence = true});
+  broker.start();
+  testing::CmmdInstance alpha(dir / "alpha", testing::sample_sim_block(), station_config("alpha", broker.port()));
+  alpha.start();
+  daemon::RpcClient local = alpha.client();
+  const int id = testing::submit_quick_job(local, dir / "scan");
+  testing::wait_for_job(local, id, {"done"}, 120);
+  wait_until_acknowledged(alpha, 10);
+  EXPECT_EQ(alpha.terminate(), 0);  // what comes back after the kill is the broker's own
+  broker.kill9();
+  broker.start();
+  const std::string result = "cmmd/alpha/jobs/" + std::to_string(id) + "/result";
+  testing::MqttListener viewer(broker.port(), "viewer", "viewer-pw", {result});
+  const daemon::MqttMessage kept =
+      viewer.wait_for("the result from the broker's database", [&](const auto& m) { return is_topic(m, result); }, 5);
+  EXPECT_TRUE(kept.retain);
+  EXPECT_EQ(payload(kept).at("state"), "done") << kept.payload;
+}
+
 // The documented set-up: the broker takes TLS only. cmmd and cmmctl verify its certificate against
 // the CA they are given; a client without it, or with another CA, gets no link.
 TEST(FleetTls, StationsAndCmmctlTalkTlsAndAnotherCaIsRefused) {
   const auto dir = daemon::fresh_folder("fleet-tls");
-  testing::BrokerProcess broker(dir / "broker", kUsers, true);
+  testing::BrokerProcess broker(dir / "broker", kUsers, {.tls = true});
   broker.start();
   json config = station_config("alpha", broker.port());
   config["mqtt"]["tls"] = {{"ca_file", broker.tls_ca().string()}};

@@ -4,6 +4,8 @@
 // file (which validates against the QIF 3.0 schema), and in the job record. And an honest verdict over
 // Modbus (the real cmm-sim): a job whose features it was asked for went unmeasured is incomplete
 // everywhere, and the same job with those features left out on purpose passes, counting them apart.
+// A nominal that is no mesh, or no model at all, is refused at its own field by plan.preview and
+// job.submit alike, before any work.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -12,8 +14,12 @@
 #include <nlohmann/json.hpp>
 
 #include "cmmd_instance.hpp"
+#include "rpc_exchange.hpp"
 #include "web_client.hpp"
 #include "daemon/client/model_upload.hpp"
+#include "daemon/client/rpc_error.hpp"
+#include "geometry/mesh_io.hpp"
+#include "geometry/xyz_io.hpp"
 #include "tests/daemon/fresh_folder.hpp"
 #include "tests/tools/run_command.hpp"
 
@@ -251,6 +257,43 @@ TEST(CmmdInspection, UnmeasuredFeaturesMakeTheJobIncompleteLeftOutOnPurposeItPas
   // The station's counters say the same.
   EXPECT_EQ(metric(cmmd.http_port(), "cmmd_job_verdicts_total{verdict=\"incomplete\"}"), 1);
   EXPECT_EQ(metric(cmmd.http_port(), "cmmd_job_verdicts_total{verdict=\"pass\"}"), 1);
+}
+
+TEST(CmmdInspection, ANominalThatIsACloudOrNoModelIsRefusedAtItsFieldByPreviewAndSubmitAlike) {
+  const auto dir = daemon::fresh_folder("inspection-bad-nominal");
+  CmmdInstance cmmd(dir / "cmmd", testing::sample_sim_block());
+  cmmd.start();
+  daemon::RpcClient client = cmmd.client();
+  // The nominal's own points without its faces, as a scanner would give them: right size, no edges.
+  geometry::PointCloud points;
+  points.points = geometry::read_mesh(sample_nominal(dir / "scan")).vertices;
+  {
+    std::ofstream out(dir / "nominal_points.xyz");
+    geometry::write_xyz(out, points);
+  }
+  const std::string cloud = daemon::upload_model(client, dir / "nominal_points.xyz", 256 * 1024);
+  json request = {{"model", daemon::upload_model(client, testing::sample_scan(dir / "scan"), 256 * 1024)},
+                  {"spacing_mm", 8},
+                  {"registration", testing::sample_measure_plate(dir / "scan")},
+                  {"nominal", {{"model", cloud}, {"placement", "given"}}}};
+  const auto expect_refused_at_nominal = [&](const std::string& method, const std::string& says) {
+    const daemon::RpcError e = testing::error_of(client, method, request, 120);
+    EXPECT_EQ(e.code(), daemon::rpc_code::invalid_params) << method << ": " << e.what();
+    EXPECT_EQ(e.data().value("path", ""), "/nominal/model") << method << ": " << e.data().dump();
+    EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << method << ": " << e.what();
+  };
+  // Refused at once, not after every touch when the result holds the part against it.
+  for (const char* method : {"plan.preview", "job.submit"}) expect_refused_at_nominal(method, "point cloud");
+  // A malformed reference is the nominal's fault, not the model's.
+  request["nominal"]["model"] = "sha256:0123";
+  for (const char* method : {"plan.preview", "job.submit"}) expect_refused_at_nominal(method, "64 hex digits");
+  EXPECT_TRUE(client.call("job.list").at("jobs").empty()) << "a job with a bad nominal was queued";
+
+  request["nominal"]["model"] = "sha256:" + std::string(64, 'e');
+  const daemon::RpcError absent = testing::error_of(client, "plan.preview", request, 120);
+  EXPECT_EQ(absent.code(), daemon::rpc_code::not_found) << absent.what();
+  EXPECT_EQ(absent.data().value("path", ""), "/nominal/model") << absent.data().dump();
+  EXPECT_EQ(cmmd.terminate(), 0);
 }
 
 }  // namespace

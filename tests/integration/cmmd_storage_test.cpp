@@ -4,7 +4,8 @@
 // (the simulator's trigger noise is one draw per touch, in order, so a touch made twice would shift
 // every centre after it: the result must equal an uninterrupted run's to the last bit); a job whose
 // result could not be written makes it again without moving the machine; an upload and a submit on
-// a full disk are −32021 storage_full and leave nothing half written.
+// a full disk are −32021 storage_full and leave nothing half written; the temp files of a cmmd killed
+// mid-write are gone after the next start.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -287,6 +288,29 @@ TEST(CmmdStorage, AnUploadAndASubmitOnAFullDiskAreStorageFullAndLeaveNothingHalf
   const int id = client.call("job.submit", request).at("id");
   EXPECT_EQ(id, 1) << "the refused submit took an id";
   client.call("job.cancel", {{"job", id}});
+  EXPECT_EQ(cmmd.terminate(), 0);
+}
+
+void write_text(const std::filesystem::path& file, const std::string& text) {
+  std::filesystem::create_directories(file.parent_path());
+  std::ofstream(file) << text;
+}
+
+TEST(CmmdStorage, TheTempFilesOfAWriterKilledMidWriteAreRemovedAtStartAndNothingElse) {
+  const Scratch dir("temps");
+  CmmdInstance cmmd(dir.path / "cmmd", testing::timed_sim_block(0));
+  const std::filesystem::path state = dir.path / "cmmd" / "state", job = cmmd.job_folder(7);
+  // No process has a pid above the kernel's limit (2^22): these writers are surely dead.
+  const std::vector<std::filesystem::path> dead = {job / ".result.csv.tmp-2147483647", job / ".merged.ply.tmp-2147483646",
+                                                   state / "models" / ".0123.ply.tmp-2147483645",
+                                                   state / ".touch_in_progress.json.tmp-2147483644"};
+  const std::vector<std::filesystem::path> kept = {job / "result.csv", job / "result.csv.tmp-1", job / ".notes.tmp-x",
+                                                   job / (".report.html.tmp-" + std::to_string(::getpid()))};  // a live writer's
+  for (const auto& file : dead) write_text(file, "half");
+  for (const auto& file : kept) write_text(file, "whole");
+  cmmd.start();
+  for (const auto& file : dead) EXPECT_FALSE(std::filesystem::exists(file)) << file;
+  for (const auto& file : kept) EXPECT_TRUE(std::filesystem::exists(file)) << file;
   EXPECT_EQ(cmmd.terminate(), 0);
 }
 

@@ -1,7 +1,8 @@
 // The dashboard's server in the real cmmd: files from the web root and Debian's three.js and
 // Chart.js with their content types, no way out of a root, the Host and Origin checks, JSON-RPC
 // over the WebSocket with the roles of docs/api.md (observer by loopback, operator only by a
-// token), notifications, an oversized message, the reports' tokens, and TCP unharmed beside it.
+// token), notifications, an oversized message, the reports' tokens (in a header, never in the URL),
+// and TCP unharmed beside it.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -235,7 +236,7 @@ TEST(CmmdWeb, AnOversizedMessageClosesItsConnectionAndNoOther) {
   EXPECT_EQ(cmmd.terminate(), 0);
 }
 
-TEST(CmmdWeb, WithTokensTheWebSocketStartsWithNoRoleAndReportsNeedAToken) {
+TEST(CmmdWeb, WithTokensTheWebSocketStartsWithNoRoleAndReportsNeedATokenNeverInTheUrl) {
   const fs::path dir = daemon::fresh_folder("web-tokens");
   CmmdInstance cmmd(dir / "cmmd", {{"driver", "sim"}},
                     {{"server", {{"tokens", testing::observer_and_operator_tokens(kObserverToken, kOperatorToken)}}}});
@@ -262,11 +263,25 @@ TEST(CmmdWeb, WithTokensTheWebSocketStartsWithNoRoleAndReportsNeedAToken) {
   write_file(cmmd.job_folder(3) / "report.html", "<!doctype html><title>report 3</title>");
   const int port = cmmd.http_port();
   EXPECT_EQ(http_request(port, "GET", "/jobs/3/report").status, 401);
-  EXPECT_EQ(http_request(port, "GET", "/jobs/3/report?token=wrong-token").status, 403);
-  const testing::HttpReply report = http_request(port, "GET", "/jobs/3/report?token=" + kObserverToken);
+  EXPECT_EQ(http_request(port, "GET", "/jobs/3/report", {{"Authorization", "Bearer wrong-token"}}).status, 403);
+  const testing::HttpReply report = http_request(port, "GET", "/jobs/3/report", {{"Authorization", "Bearer " + kObserverToken}});
   EXPECT_EQ(report.status, 200);
   EXPECT_NE(report.body.find("report 3"), std::string::npos);
   EXPECT_EQ(report.header("referrer-policy"), "no-referrer");
+  // A token in the URL (browser history, proxy logs, a printed report's footer) is never taken, not
+  // even a right one beside a right header.
+  for (const testing::HttpReply& refused :
+       {http_request(port, "GET", "/jobs/3/report?token=" + kObserverToken),
+        http_request(port, "GET", "/jobs/3/report?token=" + kOperatorToken, {{"Authorization", "Bearer " + kObserverToken}})}) {
+    EXPECT_EQ(refused.status, 400) << refused.body;
+    EXPECT_EQ(refused.body.find("report 3"), std::string::npos);
+    EXPECT_NE(refused.body.find("never taken in a URL"), std::string::npos) << refused.body;
+  }
+  // The dashboard's way: job.report over its authenticated WebSocket, which needs a role like any call.
+  WebSocketClient page(port);
+  EXPECT_EQ(page.error_of("job.report", {{"job", 3}}).code(), rpc_code::unauthorized);
+  page.call("server.auth", {{"token", kObserverToken}});
+  EXPECT_EQ(page.error_of("job.report", {{"job", 3}}).code(), rpc_code::not_found) << "job 3 is no job cmmd knows";
   EXPECT_EQ(cmmd.terminate(), 0);
 }
 

@@ -7,9 +7,9 @@ drives Debian's headless Chromium (SwiftShader WebGL) with chromedriver and Sele
 sample scan by a drop on the upload area, submits a job with its plate corners, tolerances and the
 sample part as the nominal, and checks that the 3-D view draws the mesh and the planned points, that
 the touches count up live, that STOP pauses the running job and Resume continues it, that the done
-job shows its verdict, the deviation legend and a clicked point's figures, that an observer sees the
-jobs but cannot act (its buttons disabled but STOP, a forced call refused with a message), and that neither
-page logged a console error. Screenshots of each stage go to --artifacts (or $CMMD_TEST_ARTIFACTS).
+job shows its verdict, the deviation legend and a clicked point's figures and opens its report with
+no token in any URL, that an observer sees the jobs but cannot act (its buttons disabled but STOP, a
+forced call refused with a message), and that neither page logged a console error. Screenshots of each stage go to --artifacts (or $CMMD_TEST_ARTIFACTS).
 
 Waits are WebDriverWait polls with deadlines, never fixed sleeps. Run by ctest (tests/CMakeLists.txt)
 with the paths of the build's cmmd and cmm-scan.
@@ -24,6 +24,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import urllib.error
 import urllib.request
 
 from selenium import webdriver
@@ -311,10 +312,25 @@ def main():
             canvas, int(spot['x'] - canvas.size['width'] / 2), int(spot['y'] - canvas.size['height'] / 2)).click().perform()
         wait(operator, 10, 'the clicked point\'s figures', lambda d: 'deviation vs nominal' in text(d, '#point-info'))
         assert operator.find_element(By.ID, 'histogram-box').is_displayed()
+        # The report: no token in any URL (history, proxy logs, a printed footer would keep it); the
+        # link opens it over the page's own connection, and the server refuses a token in a query.
         report = operator.find_element(By.ID, 'report-link').get_attribute('href')
-        assert report.endswith(f'/jobs/{job}/report?token={OPERATOR_TOKEN}'), report
-        with urllib.request.urlopen(report, timeout=30) as r:
-            assert r.status == 200 and b'<html' in r.read(4096).lower()
+        assert report.endswith(f'/jobs/{job}/report'), report
+        for url, refused in ((report, 401), (f'{report}?token={OPERATOR_TOKEN}', 400)):
+            try:
+                urllib.request.urlopen(url, timeout=30)
+                raise AssertionError(f'{url} was served without the token in a header')
+            except urllib.error.HTTPError as e:
+                assert e.code == refused, f'{url}: {e.code}'
+        dashboard_tab = operator.current_window_handle
+        operator.find_element(By.ID, 'report-link').click()
+        wait(operator, 20, 'the report\'s tab', lambda d: len(d.window_handles) == 2)
+        operator.switch_to.window(next(h for h in operator.window_handles if h != dashboard_tab))
+        wait(operator, 30, 'the report in its tab', lambda d: d.current_url.startswith('blob:')
+             and 'class="verdict' in d.page_source)
+        assert OPERATOR_TOKEN not in operator.current_url, operator.current_url
+        operator.close()
+        operator.switch_to.window(dashboard_tab)
         shot(operator, '6-done')
         if args.readme_screenshot:
             os.makedirs(os.path.dirname(os.path.abspath(args.readme_screenshot)), exist_ok=True)
