@@ -4,6 +4,7 @@
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -17,6 +18,13 @@ namespace cmm::testing {
 namespace ipp = hal::ippdme;
 
 namespace {
+
+// Lines go out one by one and each waits for its answer: without this, Nagle's algorithm holds
+// every small write for the peer's delayed ACK (40 ms a line).
+void no_delay(int fd) {
+  const int one = 1;
+  ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+}
 
 int listen_loopback(int* port) {
   const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
@@ -108,6 +116,8 @@ void IppDmeProxy::accept_loop() {
       ::close(client);
       continue;
     }
+    no_delay(client);
+    no_delay(server);
     ++connections_;
     const std::lock_guard lock(mutex_);
     sockets_.push_back(client);
