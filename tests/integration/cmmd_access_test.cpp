@@ -65,11 +65,14 @@ int held_connection(int port, const std::string& bytes) {
 }
 
 // Waits until no jog runs and returns how the last one ended.
-json last_jog_when_ended(RpcClient& client, double timeout_s = 20) {
+// machine.status's last_jog once jog `id` has ended. The status stops listing a jog as soon as a stop
+// is asked for, a moment before its thread records why it ended: so wait for that record, by id.
+json last_jog_when_ended(RpcClient& client, int id, double timeout_s = 20) {
   const auto t0 = Clock::now();
   for (;;) {
     const json status = client.call("machine.status");
-    if (status["jog"].is_null()) return status["last_jog"];
+    if (status["jog"].is_null() && status["last_jog"].is_object() && status["last_jog"]["id"] == id)
+      return status["last_jog"];
     if (since(t0) > timeout_s) throw std::runtime_error("the jog still runs: " + status.dump());
     client.wait_notification(0.05);  // a pause that also drains what a subscription sent
   }
@@ -184,7 +187,7 @@ TEST(CmmdAccess, ASecondOperatorCannotKeepAnothersJogAliveAndAnObserverStopsIt) 
     b.wait_notification(0.1);  // the button's cadence
   }
   const double lasted = since(t0);
-  const json ended = last_jog_when_ended(unix_client);
+  const json ended = last_jog_when_ended(unix_client, jog);
   const double moved = x0 - x_of(unix_client);
   std::printf("B's calls while A's jog %d ran: %d refused, %d taken; it ended after %.2f s (%s), %.3f mm\n", jog, refused,
               taken, lasted, ended.dump().c_str(), moved);
@@ -194,14 +197,14 @@ TEST(CmmdAccess, ASecondOperatorCannotKeepAnothersJogAliveAndAnObserverStopsIt) 
   EXPECT_LE(moved, 5 * (0.3 + 0.1) + 0.05) << "the jog ran on after its owner let go";
 
   // A step jog of A's, stopped by a dashboard that has no token: an observer.
-  a.call("machine.jog", {{"direction", {0, -1, 0}}, {"distance_mm", 40}});
+  const int step = a.call("machine.jog", {{"direction", {0, -1, 0}}, {"distance_mm", 40}})["jog"].get<int>();
   testing::WebSocketClient observer(cmmd.http_port());
   EXPECT_EQ(observer.call("server.info")["role"], "observer");
   observer.call("machine.jog_stop");
-  EXPECT_EQ(last_jog_when_ended(unix_client)["reason"], "stopped by machine.jog_stop");
-  a.call("machine.jog", {{"direction", {0, 0, -1}}, {"distance_mm", 40}});
+  EXPECT_EQ(last_jog_when_ended(unix_client, step)["reason"], "stopped by machine.jog_stop");
+  const int down = a.call("machine.jog", {{"direction", {0, 0, -1}}, {"distance_mm", 40}})["jog"].get<int>();
   observer.call("machine.stop");
-  EXPECT_EQ(last_jog_when_ended(unix_client)["fault"], "Aborted");
+  EXPECT_EQ(last_jog_when_ended(unix_client, down)["fault"], "Aborted");
   EXPECT_EQ(observer.error_of("machine.home").code(), rpc_code::unauthorized) << "an observer stops, nothing more";
   EXPECT_EQ(cmmd.terminate(), 0);
 }
@@ -299,11 +302,11 @@ TEST(CmmdAccess, StopGetsThroughFloodedDoorsOverTheDashboardTcpTheUnixSocketAndM
   std::map<std::string, double> latency_s;
   const auto stop_via = [&](const std::string& door, const std::function<void()>& stop) {
     // Homed at the travel box's far corner: -y has room for every door's jog of 30 mm stopped early.
-    unix_client.call("machine.jog", {{"direction", {0, -1, 0}}, {"distance_mm", 30}});
+    const int jog = unix_client.call("machine.jog", {{"direction", {0, -1, 0}}, {"distance_mm", 30}})["jog"].get<int>();
     const auto t0 = Clock::now();
     stop();
     latency_s[door] = since(t0);
-    EXPECT_EQ(last_jog_when_ended(unix_client)["fault"], "Aborted") << "STOP over " << door << " did not stop the jog";
+    EXPECT_EQ(last_jog_when_ended(unix_client, jog)["fault"], "Aborted") << "STOP over " << door << " did not stop the jog";
   };
   stop_via("dashboard (a tab connecting now)", [&] {
     testing::WebSocketClient tab(cmmd.http_port(), {{"Origin", "http://127.0.0.1:" + std::to_string(cmmd.http_port())}});
