@@ -100,16 +100,8 @@ TEST(JobRequestTips, AutoAndNoUnqualifiedTipUnlessSaid) {
   const JobRequest named = parse_job_request(preview({{"tip", "T2"}, {"allow_unqualified_tip", true}}), config(), true);
   EXPECT_EQ(named.tip, "T2");
   EXPECT_TRUE(named.allow_unqualified_tip);
-  for (const json& patch : {json{{"tip", "T9"}}, json{{"tip", 2}}, json{{"allow_unqualified_tip", "yes"}}}) {
-    SCOPED_TRACE(patch.dump());
-    try {
-      parse_job_request(preview(patch), config(), true);
-      ADD_FAILURE() << "no error";
-    } catch (const RpcError& e) {
-      EXPECT_EQ(e.code(), rpc_code::invalid_params);
-      EXPECT_EQ(e.data().value("path", ""), "/" + patch.begin().key());
-    }
-  }
+  for (const json& patch : {json{{"tip", "T9"}}, json{{"tip", 2}}, json{{"allow_unqualified_tip", "yes"}}})
+    expect_refused(patch, "/" + patch.begin().key(), "");
 }
 
 TEST(JobRequestInspect, LeftOutEveryFeatureIsAskedFor) {
