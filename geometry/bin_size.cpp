@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 namespace cmm::geometry {
@@ -58,6 +59,16 @@ double median_spacing(const Points& points, const CloudIndex& index) {
   auto middle = nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2);
   std::nth_element(nearest.begin(), middle, nearest.end());
   return *middle;
+}
+
+double sparse_density(const std::vector<LocalSurface>& fits, double quantile) {
+  std::vector<double> density;
+  for (const LocalSurface& f : fits)
+    if (f.regular && f.radius_mm > 0) density.push_back(f.neighbours / (std::numbers::pi * f.radius_mm * f.radius_mm));
+  if (density.empty()) return 0;
+  const auto at = static_cast<std::ptrdiff_t>(std::clamp(quantile, 0.0, 1.0) * static_cast<double>(density.size() - 1));
+  std::nth_element(density.begin(), density.begin() + at, density.end());
+  return density[static_cast<std::size_t>(at)];
 }
 
 BinSize bin_size_for_tolerance(const Points& points, const std::vector<LocalSurface>& fits, const CloudIndex& index,
@@ -117,10 +128,16 @@ BinSize bin_size_for_tolerance(const Points& points, const std::vector<LocalSurf
   result.median_spacing_mm = median_spacing(points, index);
   double diagonal = 0;
   if (points.rows() > 0) diagonal = (points.colwise().maxCoeff() - points.colwise().minCoeff()).norm();
-  const double cap = std::max(options.spacing_cap * result.median_spacing_mm, options.size_cap * diagonal);
-  const bool by_spacing = options.spacing_cap * result.median_spacing_mm >= options.size_cap * diagonal;
-  const std::string cap_text = by_spacing ? format("%g × the median raw spacing %.4f mm", options.spacing_cap, result.median_spacing_mm)
-                                          : format("%g × the cloud's diagonal %.1f mm", options.size_cap, diagonal);
+  result.sparse_density_per_mm2 = sparse_density(fits, options.sparse_quantile);
+  result.sampling_floor_mm =
+      result.sparse_density_per_mm2 > 0 ? std::sqrt(options.samples_per_bin / result.sparse_density_per_mm2) : 0;
+  const std::string floor_text = format("the sampling floor %.4f mm (%g raw points per bin where the scan holds %.1f per mm²)",
+                                        result.sampling_floor_mm, options.samples_per_bin, result.sparse_density_per_mm2);
+  const double spacing_cap = options.spacing_cap * result.median_spacing_mm, size_cap = options.size_cap * diagonal;
+  const double cap = std::max({spacing_cap, size_cap, result.sampling_floor_mm});
+  const std::string cap_text = cap == result.sampling_floor_mm ? floor_text
+                               : cap == spacing_cap ? format("%g × the median raw spacing %.4f mm", options.spacing_cap, result.median_spacing_mm)
+                                                    : format("%g × the cloud's diagonal %.1f mm", options.size_cap, diagonal);
 
   // What the noise could hide: a curvature below the median region's significance threshold is not
   // told from noise anywhere, so an "insignificant" region may still curve that much. B never exceeds
@@ -138,14 +155,22 @@ BinSize bin_size_for_tolerance(const Points& points, const std::vector<LocalSurf
 
   if (best == n || hidden_bin < bin_for_edge_length(region[best])) {
     if (hidden_bin < cap) {
-      result.bin_mm = hidden_bin;
-      result.edge_length_mm = kMaxEdgeBins * hidden_bin;
+      // The hidden curvature is a bound, not a measurement: a bin below the sampling floor buys no
+      // accuracy, only empty bins (pinholes). A measured curvature still wins: where it allows less
+      // than the floor, the scan is sparse for ε where it curves, and B stays where ε and the noise put it.
+      const double measured = best == n ? infinity : bin_for_edge_length(region[best]);
+      const double bin = result.sampling_floor_mm <= measured ? std::max(hidden_bin, result.sampling_floor_mm) : hidden_bin;
+      result.bin_mm = bin;
+      result.edge_length_mm = kMaxEdgeBins * bin;
       result.noise_limited = true;
+      result.sampling_limited = bin > hidden_bin;
       result.k1 = hidden_k;
       result.second_derivative_sum = 2 * hidden_k;
       result.source = format("tolerance %.3f mm against the scan's noise: a curvature below %.4f /mm is not told from "
                              "noise in a region of %zu points, and B allows it everywhere",
                              eps, hidden_k, region_size);
+      if (result.sampling_limited)
+        result.source += format("; raised to %s", floor_text.c_str());
       return result;
     }
     if (best == n) {

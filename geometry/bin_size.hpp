@@ -48,6 +48,13 @@ struct BinSizeOptions {
   // bounding-box diagonal, so that every face keeps points near its edges for the triangulation.
   double spacing_cap = 4;
   double size_cap = 0.02;
+  // The sampling floor: where no measured curvature sets B (the noise or the cap does), B is at least
+  // what gives a bin this many raw points on average where the scan is sparsest (the `sparse_quantile`
+  // of the points' local densities). A bin of area B² over a random sample of density ρ is empty with
+  // probability e^(−ρB²): at 6, 0.25 %, lone gaps the triangulation bridges; at the 1.5–3 a noise-set
+  // bin held on a merged random scan, 5–20 %, and every cluster of empty bins was a pinhole.
+  double samples_per_bin = 6;
+  double sparse_quantile = 0.1;
 };
 
 struct BinSize {
@@ -64,8 +71,16 @@ struct BinSize {
   bool capped = false;               // B is the cap, not ε's
   bool noise_limited = false;        // B is what the curvature the noise can hide allows
   double median_spacing_mm = 0;      // of the raw cloud
+  double sparse_density_per_mm2 = 0; // points per mm² of surface where the scan is sparsest (see options)
+  double sampling_floor_mm = 0;      // √(samples_per_bin / sparse density)
+  bool sampling_limited = false;     // B was raised to the sampling floor
   std::string source;                // for the report, e.g. "tolerance 0.050 mm at the most curved region near (…) mm, …"
 };
+
+// The surface density of the raw points around each regular fit, k / (π·r_k²) with r_k the distance to
+// its k-th neighbour, at `quantile` (0.1: where the scan is sparsest, not its single sparsest spot).
+// 0 without regular fits.
+double sparse_density(const std::vector<LocalSurface>& fits, double quantile);
 
 // Median distance from a point to its nearest other point (sampled on at most 20,000 evenly spaced
 // points; deterministic). 0 for fewer than two distinct points.

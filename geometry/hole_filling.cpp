@@ -290,7 +290,7 @@ class Filler {
     if (newell.norm() > 0)
       for (const Vec3& p : x) off_plane = std::max(off_plane, std::abs((p - centre).dot(newell.normalized())));
     std::vector<Face> faces;
-    if (newell.norm() > 0 && off_plane <= options_.flatness_bins * bin_ && clip(cycle, newell.normalized(), x, faces))
+    if (newell.norm() > 0 && off_plane <= options_.flatness_bins * bin_ + 3 * options_.noise_sigma_mm && clip(cycle, newell.normalized(), x, faces))
       return commit(faces, {}, cycle, perimeter, "filled flat");
     say(cycle, perimeter, bent ? "across a crease, not filled" : "not flat, an outline, not simple or no fresh diagonal", 0);
     failed_.push_back(cycle);

@@ -16,7 +16,8 @@ struct HoleFillingOptions {
   double min_support = 0.9;         // fraction of the patch's sample points that must be backed,
   double max_gap_bins = 1.5;        // or: no sample farther than this from the cloud (a sampling void)
   double crease_angle_deg = 30;     // a loop whose faces turn more than this spans a crease
-  double flatness_bins = 0.25;      // a loop filled flat lies within this of its mean plane
+  double flatness_bins = 0.25;      // a loop filled flat lies within this of its mean plane,
+  double noise_sigma_mm = 0;        // plus 3 σ of the scan's noise (vertices whose fit was irregular stay raw)
   // Rounds of: fill, then cut back the rim facets of the loops no patch closed, and fill again. More
   // than one closes more loops on the case-3 scan (22 left instead of 52) but the wider patches misplace
   // edges by up to 0.14 mm, so one is the default.

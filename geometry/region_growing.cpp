@@ -296,6 +296,7 @@ Triangulation triangulate_scan(const Points& thinned, const Points& raw, const s
     HoleFillingOptions filling;
     filling.bin_mm = bin;
     filling.crease_angle_deg = options.crease_angle_deg;
+    filling.noise_sigma_mm = options.noise_sigma_mm;
     const HoleFilling filled = fill_false_holes(out.mesh, raw, raw_index, filling);
     out.holes_filled = filled.loops_filled;
     out.thinned_index.resize(out.thinned_index.size() + filled.vertices_added, -1);  // on a crease

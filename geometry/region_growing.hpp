@@ -26,6 +26,9 @@ struct RegionGrowingOptions {
   // Per thinned point, the longest edge it may have (adaptive bins: max_edge_bins times its own bin);
   // empty: max_edge_bins·bin_mm for every point. Crease points take max_edge_bins·bin_mm.
   std::vector<double> reach_mm;
+  // The scan's noise σ off the surface: a point whose fit was irregular keeps its raw, noisy place,
+  // so the gap-closing pass allows loops this much (×3) off flat.
+  double noise_sigma_mm = 0;
   CancelCheck cancel;
 };
 

@@ -174,6 +174,7 @@ ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanO
   growing.max_edge_bins = kMaxEdgeBins;
   // Adaptive: each point's edges no longer than its own bin allows, so curved parts keep short edges.
   growing.reach_mm = std::move(reach);
+  growing.noise_sigma_mm = report.noise_sigma_mm;
   growing.cancel = options.cancel;
   Triangulation t = triangulate_scan(thinned, scan.points, fits, index, scan.normals, growing);
   clock.done("triangulation");

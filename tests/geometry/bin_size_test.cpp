@@ -2,6 +2,7 @@
 // region that sets it on curved, creased, spiked and flat clouds; the too-sparse check.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <numbers>
@@ -173,6 +174,38 @@ TEST(BinSize, ANoisyFlatScanIsLimitedByWhatTheNoiseHides) {
   EXPECT_LT(bin.bin_mm, 4 * bin.median_spacing_mm);
   EXPECT_GT(bin.bin_mm, 2 * bin.median_spacing_mm);
   EXPECT_NE(bin.source.find("not told from noise"), std::string::npos) << bin.source;
+}
+
+// A random scan (not a grid) of a flat face with the noise σ = ε/2: the curvature the noise could hide
+// would make the bins hold 1–3 points, and a fifth of them empty (pinholes). B rises to the sampling
+// floor, 6 points per bin where the scan is sparsest, and almost no bin on the face is empty.
+TEST(BinSize, ARandomNoisyScanKeepsItsBinsFull) {
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> along(0, 30);
+  std::normal_distribution<double> noise(0, 0.05);
+  constexpr int n = 18'000;  // 20 per mm²
+  Points p(n, 3);
+  for (int i = 0; i < n; ++i) p.row(i) = Vec3(along(rng) + noise(rng), along(rng) + noise(rng), 1 + noise(rng)).transpose();
+  const Scan plane(p);
+  BinSizeOptions options;
+  options.tolerance_mm = 0.1;
+  const BinSize bin = bin_size_for_tolerance(plane.points, plane.fits, plane.index, options);
+  std::cout << "random plane σ 0.05: " << bin.source << ": B " << bin.bin_mm << "\n";
+  EXPECT_TRUE(bin.sampling_limited);
+  EXPECT_GT(bin.sparse_density_per_mm2, 12);  // the 10th percentile of a random scan of 20 per mm²
+  EXPECT_LT(bin.sparse_density_per_mm2, 20);
+  EXPECT_NEAR(bin.bin_mm, std::sqrt(6 / bin.sparse_density_per_mm2), 1e-12);
+  EXPECT_NE(bin.source.find("sampling floor"), std::string::npos) << bin.source;
+  // Empty bins of the face's grid, away from its borders.
+  const int cells = static_cast<int>(26 / bin.bin_mm);
+  std::vector<int> count(static_cast<std::size_t>(cells * cells), 0);
+  for (int i = 0; i < n; ++i) {
+    const int x = static_cast<int>(std::floor((p(i, 0) - 2) / bin.bin_mm)), y = static_cast<int>(std::floor((p(i, 1) - 2) / bin.bin_mm));
+    if (x >= 0 && y >= 0 && x < cells && y < cells) ++count[static_cast<std::size_t>(y * cells + x)];
+  }
+  const double empty = static_cast<double>(std::count(count.begin(), count.end(), 0)) / static_cast<double>(count.size());
+  std::cout << "empty bins: " << 100 * empty << " %\n";
+  EXPECT_LT(empty, 0.01);
 }
 
 TEST(BinSize, ASparseCloudSaysWhichToleranceWouldDo) {
