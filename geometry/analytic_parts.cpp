@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "geometry/box_with_holes_mesher.hpp"
+#include "geometry/box_with_holes_slot.hpp"
 #include "geometry/edge_point.hpp"
 #include "geometry/revolved_mesher.hpp"
 
@@ -17,7 +18,7 @@ namespace {
 
 using Point2 = Eigen::Vector2d;
 
-// 0.05 mm keeps the chord error between samples of the smallest circle (r = 3 mm) near 0.1 µm.
+// 0.05 mm keeps the chord error between samples of the smallest circle (a slot's end, r = 1 mm) near 0.3 µm.
 constexpr double kSampleSpacing = 0.05;
 
 // Orders the two side normals by the same n_up convention the extractor uses.
@@ -46,6 +47,22 @@ TrueEdge circular_edge(const Vec3& centre, double radius, SideNormals side_norma
     const Vec3 u(std::cos(angle), std::sin(angle), 0);
     const auto [a, b] = side_normals(u);
     edge.samples.push_back(edge_sample(centre + radius * u, a, b));
+  }
+  return edge;
+}
+
+// A slot's rim at height z on the face whose normal is `face`; the wall's outward normal points into
+// the slot, against the rim's outward normal.
+TrueEdge slot_edge(const VerticalHole& hole, double z, const Vec3& face) {
+  const SlotRim rim(hole);
+  const int n = static_cast<int>(std::ceil(rim.perimeter() / kSampleSpacing));
+  TrueEdge edge;
+  edge.closed = true;
+  for (int i = 0; i < n; ++i) {
+    const double s = rim.perimeter() * i / n;
+    const SlotRim::Station station = rim.at(s);
+    const Point2 p = rim.point(s);
+    edge.samples.push_back(edge_sample(Vec3(p.x(), p.y(), z), face, Vec3(-station.normal.x(), -station.normal.y(), 0)));
   }
   return edge;
 }
@@ -81,6 +98,12 @@ AnalyticPart box_part(std::string name, const Vec3& size, const std::vector<Vert
   }
   const Vec3 up = Vec3::UnitZ();
   for (const VerticalHole& hole : holes) {
+    if (hole.slot_length > 0) {
+      // A slot's two rims; it is no cylinder, so it is not among the part's holes.
+      part.sharp_edges.push_back(slot_edge(hole, size.z(), up));
+      part.sharp_edges.push_back(slot_edge(hole, 0.0, -up));
+      continue;
+    }
     const Vec3 bottom_centre(hole.x, hole.y, 0), top_centre(hole.x, hole.y, size.z());
     // The bore's outward normal points at the axis.
     part.sharp_edges.push_back(circular_edge(top_centre, hole.radius, [&](const Vec3& u) {
@@ -147,6 +170,17 @@ AnalyticPart make_plate_with_holes(const Tessellation& t) {
                   {{30, 40, 10}, {70, 25, 6}, {70, 55, 6}, {100, 20, 3}, {100, 60, 4}}, t);
 }
 
+// The plate above plus a Ø3 hole at (10, 70) and a 2 × 10 mm slot centred at (40, 10) along x: the
+// small true openings a scan's mesh must keep open. Each rim is at least 8.5 mm from the plate's sides
+// and 19 mm from the other rims, so it meshes wherever the plate does (edge_length up to about 5 mm).
+AnalyticPart make_plate_small_openings(double edge_length) {
+  return make_plate_small_openings(Tessellation{.edge_length = edge_length});
+}
+AnalyticPart make_plate_small_openings(const Tessellation& t) {
+  return box_part("plate_small_openings", Vec3(120, 80, 10),
+                  {{30, 40, 10}, {70, 25, 6}, {70, 55, 6}, {100, 20, 3}, {100, 60, 4}, {10, 70, 1.5}, {40, 10, 1, 8}}, t);
+}
+
 // Apexes at the origin and at (0, 0, 2H), rim at z = H; each apex is one vertex fanned to its ring.
 AnalyticPart make_bicone(double radius_mm, double height_mm, double edge_length) {
   return make_bicone(radius_mm, height_mm, Tessellation{.edge_length = edge_length});
@@ -197,7 +231,8 @@ TriangleMesh with_gaussian_noise(const TriangleMesh& mesh, double sigma_mm, std:
 }
 
 const std::vector<std::string>& analytic_part_names() {
-  static const std::vector<std::string> names = {"cube", "case3_block", "plate_with_holes", "bicone", "hemisphere_cone"};
+  static const std::vector<std::string> names = {"cube",   "case3_block",    "plate_with_holes", "plate_small_openings",
+                                                 "bicone", "hemisphere_cone"};
   return names;
 }
 
@@ -209,6 +244,7 @@ AnalyticPart make_analytic_part(const std::string& name, const Tessellation& t) 
   if (name == "cube") return make_cube(40, t);
   if (name == "case3_block") return make_case3_block(t);
   if (name == "plate_with_holes") return make_plate_with_holes(t);
+  if (name == "plate_small_openings") return make_plate_small_openings(t);
   if (name == "bicone") return make_bicone(25, 37.5, t);
   if (name == "hemisphere_cone") return make_hemisphere_cone(25, 25, t);
   std::string known;

@@ -70,6 +70,11 @@ AnalyticPart make_case3_block(const Tessellation& tessellation);
 // Hole axes (x, y): Ø20 at (30, 40); Ø12 at (70, 25) and (70, 55); Ø6 at (100, 20); Ø8 at (100, 60).
 AnalyticPart make_plate_with_holes(double edge_length);
 AnalyticPart make_plate_with_holes(const Tessellation& tessellation);
+// The same plate with two small true openings more: a Ø3 through hole at (10, 70) and a through slot
+// 2 mm wide and 10 mm long along x, centred at (40, 10) (half circles of radius 1 at x = 36 and 44).
+// The slot's rims are among sharp_edges (closed, not circles); it is no cylinder, so not among holes.
+AnalyticPart make_plate_small_openings(double edge_length);
+AnalyticPart make_plate_small_openings(const Tessellation& tessellation);
 // Thesis Table 5.1: two cones of rim radius R and height H joined at their rims (axis z).
 AnalyticPart make_bicone(double radius_mm, double height_mm, double edge_length);
 AnalyticPart make_bicone(double radius_mm, double height_mm, const Tessellation& tessellation);
@@ -79,7 +84,8 @@ AnalyticPart make_hemisphere_cone(double radius_mm, double height_mm, const Tess
 
 // The parts by name, at the sizes every tool and the simulator use (cube 40 mm; bicone R 25, H 37.5;
 // hemisphere-cone R 25, H 25), so a plan, a scan and a simulated part of one name agree.
-const std::vector<std::string>& analytic_part_names();  // cube, case3_block, plate_with_holes, bicone, hemisphere_cone
+// cube, case3_block, plate_with_holes, plate_small_openings, bicone, hemisphere_cone
+const std::vector<std::string>& analytic_part_names();
 // Throws std::invalid_argument naming the known parts for any other name.
 AnalyticPart make_analytic_part(const std::string& name, double edge_length);
 AnalyticPart make_analytic_part(const std::string& name, const Tessellation& tessellation);

@@ -1,6 +1,6 @@
-// The six faces of the box, each a rectangle (the top and bottom with the hole circles cut out) ear-clipped
-// in its own plane coordinates, and the bore walls as strips. Seam points come from the same arrays on
-// both faces, so MeshBuilder welds them exactly.
+// The six faces of the box, each a rectangle (the top and bottom with the hole circles and slots cut
+// out) ear-clipped in its own plane coordinates, and the bore walls as strips. Seam points come from the
+// same arrays on both faces, so MeshBuilder welds them exactly.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "geometry/box_with_holes_mesher.hpp"
+#include "geometry/box_with_holes_slot.hpp"
 #include "geometry/mesh_builder.hpp"
 #include "geometry/polygon_triangulation.hpp"
 
@@ -58,10 +59,21 @@ TriangleMesh mesh_box_with_holes_cad(const Vec3& size, const std::vector<Vertica
   std::vector<Polygon2d> circles;  // counter-clockwise seen from +z
   for (std::size_t h = 0; h < holes.size(); ++h) {
     if (segments[h] < 3) throw std::invalid_argument("mesh_box_with_holes_cad: a hole needs at least 3 segments");
+    if (!(holes[h].slot_length >= 0) || !std::isfinite(holes[h].slot_length))
+      throw std::invalid_argument("mesh_box_with_holes_cad: a slot_length is negative or not finite");
     Polygon2d circle;
-    for (int k = 0; k < segments[h]; ++k) {
-      const double angle = 2 * std::numbers::pi * k / segments[h];
-      circle.emplace_back(holes[h].x + holes[h].radius * std::cos(angle), holes[h].y + holes[h].radius * std::sin(angle));
+    if (holes[h].slot_length > 0) {
+      // Each half circle as its own fan of chords; each straight side runs from one's end to the other's start.
+      const SlotRim rim(holes[h]);
+      const int half_segments = std::max(1, (segments[h] + 1) / 2);
+      const double half_circle = std::numbers::pi * holes[h].radius;
+      for (const double start : {0.0, half_circle + holes[h].slot_length})
+        for (int k = 0; k <= half_segments; ++k) circle.push_back(rim.point(start + half_circle * k / half_segments));
+    } else {
+      for (int k = 0; k < segments[h]; ++k) {
+        const double angle = 2 * std::numbers::pi * k / segments[h];
+        circle.emplace_back(holes[h].x + holes[h].radius * std::cos(angle), holes[h].y + holes[h].radius * std::sin(angle));
+      }
     }
     circles.push_back(std::move(circle));
   }

@@ -1,5 +1,5 @@
 // The top and bottom faces are one 2-D pattern placed at z = 0 and z = size.z: a uniform grid in which
-// an octagon of cells around each hole gives way to rings zipped between the hole rim and the octagon;
+// an octagon of cells around each hole (or slot) gives way to rings zipped between the rim and the octagon;
 // the walls are lifted from the pattern's boundary polygons. Every seam point comes from the same
 // arrays on both sides, so MeshBuilder welds it exactly.
 #include "geometry/box_with_holes_mesher.hpp"
@@ -11,6 +11,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "geometry/box_with_holes_slot.hpp"
 #include "geometry/mesh_builder.hpp"
 #include "geometry/ring_zipper.hpp"
 
@@ -67,12 +68,19 @@ Octagon octagon_around(const VerticalHole& hole, const Grid& grid, double h) {
   // than its sides) stay a small part of the spoke length.
   const double reach = hole.radius + std::max(2 * h, 0.3 * hole.radius);
   const double diagonal_reach = reach * std::hypot(1 / hx, 1 / hy);  // the same distance in units of i ± j
+  // A slot's octagon is the round one stretched by half the slot's length either way along x (and so
+  // along both diagonals); for a round hole half is 0 and every bound is the round one to the bit.
+  const double half = hole.slot_length / 2;
   const auto nearest = [](double v) { return static_cast<int>(std::lround(v)); };
   // Near the box sides the octagon is clipped to the face; its outline then runs along the face edge.
-  const Octagon o{std::max(0, nearest(gx - reach / hx)), std::min(grid.cells_x(), nearest(gx + reach / hx)),
-                  std::max(0, nearest(gy - reach / hy)), std::min(grid.cells_y(), nearest(gy + reach / hy)),
-                  nearest(gx + gy - diagonal_reach),     nearest(gx + gy + diagonal_reach),
-                  nearest(gx - gy - diagonal_reach),     nearest(gx - gy + diagonal_reach)};
+  const Octagon o{std::max(0, nearest(gx - (half + reach) / hx)),
+                  std::min(grid.cells_x(), nearest(gx + (half + reach) / hx)),
+                  std::max(0, nearest(gy - reach / hy)),
+                  std::min(grid.cells_y(), nearest(gy + reach / hy)),
+                  nearest(gx + gy - half / hx - diagonal_reach),
+                  nearest(gx + gy + half / hx + diagonal_reach),
+                  nearest(gx - gy - half / hx - diagonal_reach),
+                  nearest(gx - gy + half / hx + diagonal_reach)};
   const auto v = o.vertices();
   for (std::size_t k = 0; k < v.size(); ++k) {
     const Node step = v[(k + 1) % v.size()] - v[k];
@@ -169,6 +177,85 @@ std::vector<Polygon2> hole_rings(const VerticalHole& hole, const Polygon2& outli
   return rings;
 }
 
+// Where the ray from `origin` (inside the convex counter-clockwise polygon) along `direction` leaves it.
+Point2 exit_point(const Point2& origin, const Point2& direction, const Polygon2& polygon) {
+  const auto cross = [](const Point2& u, const Point2& v) { return u.x() * v.y() - u.y() * v.x(); };
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < polygon.size(); ++i) {
+    const Point2 a = polygon[i], edge = polygon[(i + 1) % polygon.size()] - a;
+    const double across = cross(direction, edge);
+    if (across > 0) nearest = std::min(nearest, cross(a - origin, edge) / across);  // leaving this side's half plane
+  }
+  return origin + nearest * direction;
+}
+
+// A slot's rings, as hole_rings makes a round hole's, but along the rim's outward normals instead of
+// rays from one centre: on the straight sides the normals are parallel, so polar angles would crowd
+// the rim points at the middle of the sides and starve its ends. Normal rays of a convex rim never
+// cross outside it, so every ring between rim and octagon stays simple. The rim ring is spaced evenly
+// by arc length (its points exactly on the true edge), the others evenly by their own length.
+std::vector<Polygon2> slot_rings(const VerticalHole& hole, const Polygon2& outline, double h) {
+  const SlotRim rim(hole);
+  const double r = hole.radius;
+  double mean_spoke = 0, outline_length = 0, nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < outline.size(); ++i) {
+    const Point2 a = outline[i], edge = outline[(i + 1) % outline.size()] - a;
+    // The side's nearest approach to the axis segment: at an end of one or the other.
+    for (const Point2& end : {Point2(hole.x - hole.slot_length / 2, hole.y), Point2(hole.x + hole.slot_length / 2, hole.y)}) {
+      const double along = std::clamp((end - a).dot(edge) / edge.squaredNorm(), 0.0, 1.0);
+      nearest = std::min(nearest, (a + along * edge - end).norm());
+    }
+    nearest = std::min(nearest, rim.axis_distance(a));
+    mean_spoke += (rim.axis_distance(a) - r) / static_cast<double>(outline.size());
+    outline_length += edge.norm();
+  }
+  if (nearest < r + 0.5 * h)
+    throw std::invalid_argument("mesh_box_with_holes: a slot is too close to the box side for this edge length");
+
+  const double perimeter = rim.perimeter(), start = rim.arc_length_toward(outline.front());
+  const auto on_outline = [&](double s) {
+    const SlotRim::Station station = rim.at(s);
+    return exit_point(station.axis, station.normal, outline);
+  };
+  const int ring_count = std::max(1, static_cast<int>(std::lround(mean_spoke / h)));
+  // Each ring's length, tabulated finely enough that interpolating it misplaces a point by far less than h.
+  const int table = std::max(256, 32 * static_cast<int>(std::ceil(outline_length / h)));
+  std::vector<Polygon2> rings;
+  for (int k = 0; k < ring_count; ++k) {
+    const double t = static_cast<double>(k) / ring_count;
+    const auto ring_point = [&](double s) {
+      return k == 0 ? rim.point(s) : Point2((1 - t) * rim.point(s) + t * on_outline(s));
+    };
+    std::vector<double> travelled{0};  // along ring k, at s = start + perimeter · m / table
+    if (k > 0) {
+      Point2 previous = ring_point(start);
+      for (int m = 1; m <= table; ++m) {
+        const Point2 next = ring_point(start + perimeter * m / table);
+        travelled.push_back(travelled.back() + (next - previous).norm());
+        previous = next;
+      }
+    }
+    const double length = k == 0 ? perimeter : travelled.back();
+    const int n = std::max(3, static_cast<int>(std::lround(length / h)));
+    const double twist = k % 2 == 1 ? 0.5 : 0.0;
+    Polygon2 ring;
+    for (int i = 0; i < n; ++i) {
+      const double target = length * (i + twist) / n;
+      double s = start + perimeter * (i + twist) / n;  // the rim ring: arc length is the parameter
+      if (k > 0) {
+        const auto m = std::min<std::ptrdiff_t>(
+            std::upper_bound(travelled.begin(), travelled.end(), target) - travelled.begin(), table);
+        const double low = travelled[m - 1], high = travelled[m];
+        s = start + perimeter * (m - 1 + (high > low ? (target - low) / (high - low) : 0.0)) / table;
+      }
+      ring.push_back(ring_point(s));
+    }
+    rings.push_back(std::move(ring));
+  }
+  rings.push_back(outline);
+  return rings;
+}
+
 // Plain cells as two triangles, cells an octagon cuts as the triangle outside it, and the rings.
 std::vector<Triangle2> face_pattern(const Grid& grid, const std::vector<Octagon>& octagons,
                                     const std::vector<std::vector<Polygon2>>& rings) {
@@ -236,13 +323,17 @@ void add_wall(MeshBuilder& mesh, const Polygon2& polygon, const std::vector<doub
 }  // namespace
 
 TriangleMesh mesh_box_with_holes(const Vec3& size, const std::vector<VerticalHole>& holes, double edge_length) {
+  for (const VerticalHole& hole : holes)
+    if (!(hole.slot_length >= 0) || !std::isfinite(hole.slot_length))
+      throw std::invalid_argument("mesh_box_with_holes: a slot_length is negative or not finite");
   const Grid grid{grid_lines(size.x(), edge_length), grid_lines(size.y(), edge_length),
                   grid_lines(size.z(), edge_length)};
   std::vector<Octagon> octagons;
   std::vector<std::vector<Polygon2>> rings;
   for (const VerticalHole& hole : holes) {
     octagons.push_back(octagon_around(hole, grid, edge_length));
-    rings.push_back(hole_rings(hole, octagon_outline(octagons.back(), grid), edge_length));
+    const Polygon2 outline = octagon_outline(octagons.back(), grid);
+    rings.push_back(hole.slot_length > 0 ? slot_rings(hole, outline, edge_length) : hole_rings(hole, outline, edge_length));
   }
 
   MeshBuilder mesh;

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -31,8 +32,36 @@ struct Options {
   double edge_length = 1, noise = 0.05, spacing = 0.5, stray_fraction = 0.002;
   double max_incidence_deg = sim::kDefaultMaxIncidenceDeg;
   sim::ViewSetOptions views;
+  int view_count = 7;            // around + 1 from above
+  double view_offset = -1;       // mm; < 0: registration errors drawn as ViewSetOptions says
+  std::string sampling = "random", noise_model = "beam";
+  double view_coverage = 1;
+  std::vector<double> view_density;
   std::uint64_t seed = 1;
 };
+
+sim::ScanSampling sampling_named(const std::string& name) {
+  for (sim::ScanSampling s : {sim::ScanSampling::random, sim::ScanSampling::grid, sim::ScanSampling::poisson})
+    if (name == sim::to_string(s)) return s;
+  throw std::invalid_argument("--sampling " + name + ": not random, grid or poisson");
+}
+
+sim::ScanNoise noise_named(const std::string& name) {
+  for (sim::ScanNoise n : {sim::ScanNoise::beam, sim::ScanNoise::isotropic})
+    if (name == sim::to_string(n)) return n;
+  throw std::invalid_argument("--noise-model " + name + ": not beam or isotropic");
+}
+
+// The views the flags ask for: --views N spread as the defaults are, each off by --view-offset exactly
+// when given, else by the seeded default registration errors.
+std::vector<sim::ScanView> scan_views(const Options& o) {
+  if (o.view_offset >= 0) return sim::views_with_offset(o.view_count, o.view_offset, o.seed, o.views.elevation_deg);
+  sim::ViewSetOptions view_options = o.views;
+  view_options.around = o.view_count - 1;
+  view_options.from_above = true;
+  view_options.seed = o.seed;
+  return sim::default_views(view_options);
+}
 
 
 // What registration by a measured plate starts from: the plate's corners as the scan shows them
@@ -73,10 +102,13 @@ int scan(Options o) {
     }
   }
   if (o.part.empty()) throw std::invalid_argument("give --part or --sim-config");
+  if (!o.view_density.empty() && static_cast<int>(o.view_density.size()) != o.view_count)
+    throw std::invalid_argument("--view-density: " + std::to_string(o.view_density.size()) + " factors for " +
+                                std::to_string(o.view_count) + " views (--views)");
+  const sim::ScanSampling sampling = sampling_named(o.sampling);
+  const sim::ScanNoise noise_model = noise_named(o.noise_model);
   const geometry::AnalyticPart part = geometry::make_analytic_part(o.part, o.edge_length);
-  sim::ViewSetOptions view_options = o.views;
-  view_options.seed = o.seed;
-  const std::vector<sim::ScanView> views = sim::default_views(view_options);
+  const std::vector<sim::ScanView> views = scan_views(o);
 
   nlohmann::json truth = {
       {"part", o.part},
@@ -87,12 +119,18 @@ int scan(Options o) {
         {"spacing_mm", o.spacing},
         {"stray_fraction", o.stray_fraction},
         {"max_incidence_deg", o.max_incidence_deg},
+        {"sampling", o.sampling},
+        {"noise_model", o.noise_model},
+        {"view_coverage", o.view_coverage},
+        {"view_density", o.view_density},
         {"views",
-         {{"around", view_options.around},
-          {"elevation_deg", view_options.elevation_deg},
-          {"from_above", view_options.from_above},
-          {"rotation_sigma_deg", view_options.rotation_sigma_deg},
-          {"translation_sigma_mm", view_options.translation_sigma_mm}}}}},
+         {{"count", o.view_count},
+          {"around", o.view_count - 1},
+          {"elevation_deg", o.views.elevation_deg},
+          {"from_above", true},
+          {"view_offset_mm", o.view_offset >= 0 ? nlohmann::json(o.view_offset) : nlohmann::json(nullptr)},
+          {"rotation_sigma_deg", o.view_offset >= 0 ? 0.0 : o.views.rotation_sigma_deg},
+          {"translation_sigma_mm", o.view_offset >= 0 ? 0.0 : o.views.translation_sigma_mm}}}}},
       {"true_faces", part.mesh.faces.rows()},
       {"view_directions", nlohmann::json::array()}};
   for (const sim::ScanView& view : views) truth["view_directions"].push_back(description::vec3_json(view.direction));
@@ -123,17 +161,28 @@ int scan(Options o) {
                                                                    .views = views,
                                                                    .max_incidence_deg = o.max_incidence_deg,
                                                                    .stray_fraction = o.stray_fraction,
-                                                                   .seed = o.seed});
+                                                                   .seed = o.seed,
+                                                                   .sampling = sampling,
+                                                                   .noise_model = noise_model,
+                                                                   .view_coverage = o.view_coverage,
+                                                                   .view_density = o.view_density});
     geometry::write_cloud(o.cloud, raw.cloud);
     const auto strays = std::count(raw.truth.stray.begin(), raw.truth.stray.end(), true);
     truth["cloud"] = {{"file", o.cloud}, {"points", raw.cloud.points.rows()}, {"strays", strays}, {"borders", nlohmann::json::array()}};
-    // What a mesh of the scan should keep open: the borders of the seen region, no others.
-    for (const sim::ScanBorder& border : sim::scan_borders(part.mesh, views, o.max_incidence_deg))
+    if (o.view_coverage < 1) {
+      // Each view kept the points p with direction · p ≤ limit_mm.
+      truth["cloud"]["coverage"] = nlohmann::json::array();
+      for (const sim::CoverageBand& band : raw.truth.coverage)
+        truth["cloud"]["coverage"].push_back({{"direction", description::vec3_json(band.direction)}, {"limit_mm", band.limit_mm}});
+    }
+    // What a mesh of the scan should keep open: the borders of the seen region (within the views' bands), no others.
+    for (const sim::ScanBorder& border : sim::scan_borders(part.mesh, views, o.max_incidence_deg, raw.truth.coverage))
       truth["cloud"]["borders"].push_back({{"centre", description::vec3_json(border.centre)},
                                            {"perimeter_mm", border.perimeter_mm},
                                            {"kind", border.kind == geometry::LoopKind::hole ? "hole" : "outer"}});
-    std::cout << o.cloud << ": raw scan of " << o.part << ", " << raw.cloud.points.rows() << " points from "
-              << views.size() << " views, " << strays << " strays\n";
+    std::cout << o.cloud << ": raw scan of " << o.part << " (" << o.sampling << " sampling, " << o.noise_model
+              << " noise), " << raw.cloud.points.rows() << " points from " << views.size() << " views, " << strays
+              << " strays\n";
   }
   if (!o.truth.empty()) {
     std::ofstream out(o.truth);
@@ -141,6 +190,18 @@ int scan(Options o) {
     if (!out.flush()) throw std::runtime_error("cannot write " + o.truth);
   }
   return 0;
+}
+
+// A flag's value checked as a number with `ok`; CLI11 puts the flag's name before the message.
+CLI::Validator number_in(const std::string& range, bool (*ok)(double)) {
+  return CLI::Validator(
+      [range, ok](std::string& text) {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = !text.empty() && end == text.c_str() + text.size();
+        return number && ok(value) ? std::string() : text + " is not a number " + range;
+      },
+      "NUMBER " + range);
 }
 
 }  // namespace
@@ -160,9 +221,25 @@ int main(int argc, char** argv) {
   app.add_option("--rough-error", o.rough_error, "largest error of the jogged machine corners, mm")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--edge-length", o.edge_length, "edge length of the true part's mesh, mm")->check(CLI::PositiveNumber);
-  app.add_option("--noise", o.noise, "Gaussian noise sigma: per vertex coordinate (mesh), along the beam (cloud), mm")
+  app.add_option("--noise", o.noise, "Gaussian noise sigma: per vertex coordinate (mesh), as --noise-model says (cloud), mm")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--spacing", o.spacing, "raw scan sample spacing, mm")->check(CLI::PositiveNumber);
+  app.add_option("--sampling", o.sampling,
+                 "raw scan sampling: random (area-uniform per view), grid (each view's raster), poisson (merged, "
+                 "Poisson-disk)")
+      ->check(CLI::IsMember({"random", "grid", "poisson"}));
+  app.add_option("--noise-model", o.noise_model, "raw scan noise: beam (along the view) or isotropic (per coordinate)")
+      ->check(CLI::IsMember({"beam", "isotropic"}));
+  app.add_option("--views", o.view_count, "scanner views: N - 1 around at 50 degrees elevation and one from above")
+      ->check(CLI::Range(1, 360));
+  app.add_option("--view-offset", o.view_offset,
+                 "each view's registration error: a translation of exactly this many mm, seeded direction, no rotation")
+      ->check(number_in(">= 0", [](double f) { return f >= 0 && std::isfinite(f); }));
+  app.add_option("--view-coverage", o.view_coverage, "share of what it sees each view keeps, one band across it, in (0, 1]")
+      ->check(number_in("in (0, 1]", [](double f) { return f > 0 && f <= 1; }));
+  app.add_option("--view-density", o.view_density, "per-view factors on the raw scan density, one per view: a,b,c")
+      ->delimiter(',')
+      ->check(number_in("> 0", [](double f) { return f > 0 && std::isfinite(f); }));
   app.add_option("--stray-fraction", o.stray_fraction, "share of raw scan points that are strays")
       ->check(CLI::Range(0.0, 0.999));
   app.add_option("--max-incidence", o.max_incidence_deg, "steepest incidence a view still sees, degrees")

@@ -1,11 +1,15 @@
-// One engine for the whole scan, drawn in view, face, sample order, so a scan depends on its options
-// and nothing else. Faces a view does not face cost no samples: most of a scan's time is the beam tests.
+// One engine for the noise and strays of the whole scan, drawn in sample order, so a scan depends on its
+// options and nothing else. The random sampler draws from that engine too, interleaved with the noise,
+// as it always has: a seed's random scan is the same bit for bit as before grid and poisson existed.
+// Faces a view does not face cost no samples: most of a scan's time is the beam tests.
 #include "sim/raw_scan.hpp"
 
 #include <cmath>
 #include <random>
 #include <stdexcept>
 #include <string>
+
+#include "sim/scan_sampling.hpp"
 
 namespace cmm::sim {
 
@@ -21,13 +25,18 @@ void check(const RawScanOptions& o) {
   if (!(o.stray_fraction >= 0 && o.stray_fraction < 1))
     throw std::invalid_argument("raw scan: stray_fraction must be in [0, 1)");
   check_views(o.views, "raw scan: views");
-}
-
-// A point uniform over the triangle's area (the square-root map of two uniform numbers).
-Vec3 sample_triangle(std::mt19937_64& engine, const Vec3& a, const Vec3& b, const Vec3& c) {
-  std::uniform_real_distribution<double> unit(0, 1);
-  const double r = std::sqrt(unit(engine)), s = unit(engine);
-  return (1 - r) * a + r * (1 - s) * b + r * s * c;
+  if (o.sampling != ScanSampling::random && o.sampling != ScanSampling::grid && o.sampling != ScanSampling::poisson)
+    throw std::invalid_argument("raw scan: sampling is not random, grid or poisson");
+  if (o.noise_model != ScanNoise::beam && o.noise_model != ScanNoise::isotropic)
+    throw std::invalid_argument("raw scan: noise_model is not beam or isotropic");
+  if (!(o.view_coverage > 0 && o.view_coverage <= 1))
+    throw std::invalid_argument("raw scan: view_coverage must be in (0, 1]");
+  if (!o.view_density.empty() && o.view_density.size() != o.views.size())
+    throw std::invalid_argument("raw scan: view_density has " + std::to_string(o.view_density.size()) +
+                                " factors for " + std::to_string(o.views.size()) + " views");
+  for (double density : o.view_density)
+    if (!(density > 0) || !std::isfinite(density))
+      throw std::invalid_argument("raw scan: view_density factors must be finite and > 0");
 }
 
 // Where the real points came to lie and what the scanner said about them, appended point by point.
@@ -53,12 +62,34 @@ struct Collector {
 
 }  // namespace
 
+const char* to_string(ScanSampling sampling) {
+  switch (sampling) {
+    case ScanSampling::random: return "random";
+    case ScanSampling::grid: return "grid";
+    case ScanSampling::poisson: return "poisson";
+  }
+  return "?";
+}
+
+const char* to_string(ScanNoise noise) {
+  switch (noise) {
+    case ScanNoise::beam: return "beam";
+    case ScanNoise::isotropic: return "isotropic";
+  }
+  return "?";
+}
+
 RawScan synthesize_raw_scan(const geometry::TriangleMesh& scene, const RawScanOptions& o) {
   check(o);
   const ScanVisibility visibility(scene, o.max_incidence_deg);
   const geometry::FaceGeometry& faces = visibility.face_geometry();
   Collector out;
   if (scene.faces.rows() == 0) return out.finish();
+  out.truth.coverage = coverage_bands(visibility, o.views, o.view_coverage,
+                                      o.sampling == ScanSampling::grid ? CoverageMeasure::image_area : CoverageMeasure::surface_area,
+                                      o.seed);
+  const std::vector<CoverageBand>& coverage = out.truth.coverage;
+  const std::vector<double> density = o.view_density.empty() ? std::vector<double>(o.views.size(), 1.0) : o.view_density;
 
   const Vec3 lo = scene.vertices.colwise().minCoeff(), hi = scene.vertices.colwise().maxCoeff();
   const Vec3 grow = 0.05 * (hi - lo);  // 10 % in all: 5 % on each side
@@ -66,33 +97,46 @@ RawScan synthesize_raw_scan(const geometry::TriangleMesh& scene, const RawScanOp
   std::bernoulli_distribution is_stray(o.stray_fraction);
   std::normal_distribution<double> noise(0, o.noise_sigma_mm > 0 ? o.noise_sigma_mm : 1);
   std::mt19937_64 engine(o.seed);
-  const double per_area = 1 / (o.spacing_mm * o.spacing_mm);
 
-  for (int v = 0; v < static_cast<int>(o.views.size()); ++v) {
-    const ScanView& view = o.views[v];
-    for (int f = 0; f < scene.faces.rows(); ++f) {
-      if (!visibility.facing(f, view.direction)) continue;
-      // Random rounding keeps the expected count exact on faces much smaller than spacing².
-      const double expected = faces.areas[f] * per_area;
-      const int count = static_cast<int>(expected) + (unit(engine) < expected - std::floor(expected) ? 1 : 0);
-      const Vec3 a = geometry::vertex(scene, scene.faces(f, 0)), b = geometry::vertex(scene, scene.faces(f, 1)),
-                 c = geometry::vertex(scene, scene.faces(f, 2));
-      const Vec3 normal = faces.normals.row(f).transpose();
-      for (int k = 0; k < count; ++k) {
-        const Vec3 p = sample_triangle(engine, a, b, c);
-        if (visibility.occluded(p, f, view.direction)) continue;
-        if (is_stray(engine)) {
-          const Vec3 stray = (lo - grow) + Vec3(unit(engine), unit(engine), unit(engine)).cwiseProduct(hi - lo + 2 * grow);
-          out.add(view.registration_error * stray, view.registration_error.linear() * -view.direction, stray, v, -1,
-                  true);
-          continue;
+  // A sample the view saw becomes a stray or a noisy point, then goes through the view's registration error.
+  const auto report = [&](const SurfaceSample& s) {
+    const ScanView& view = o.views[s.view];
+    if (is_stray(engine)) {
+      const Vec3 stray = (lo - grow) + Vec3(unit(engine), unit(engine), unit(engine)).cwiseProduct(hi - lo + 2 * grow);
+      out.add(view.registration_error * stray, view.registration_error.linear() * -view.direction, stray, s.view, -1, true);
+      return;
+    }
+    Vec3 offset = Vec3::Zero();
+    if (o.noise_sigma_mm > 0 && o.noise_model == ScanNoise::beam) offset = noise(engine) * view.direction;
+    if (o.noise_sigma_mm > 0 && o.noise_model == ScanNoise::isotropic)
+      for (int k = 0; k < 3; ++k) offset[k] = noise(engine);  // one coordinate at a time: a fixed draw order
+    out.add(view.registration_error * (s.point + offset), view.registration_error.linear() * faces.normals.row(s.face).transpose(),
+            s.point, s.view, s.face, false);
+  };
+
+  if (o.sampling == ScanSampling::random) {
+    const double per_area = 1 / (o.spacing_mm * o.spacing_mm);
+    for (int v = 0; v < static_cast<int>(o.views.size()); ++v) {
+      const ScanView& view = o.views[v];
+      const double view_per_area = per_area * density[v];  // × 1 is exact: unit densities change no draw
+      for (int f = 0; f < scene.faces.rows(); ++f) {
+        if (!visibility.facing(f, view.direction)) continue;
+        // Random rounding keeps the expected count exact on faces much smaller than spacing².
+        const double expected = faces.areas[f] * view_per_area;
+        const int count = static_cast<int>(expected) + (unit(engine) < expected - std::floor(expected) ? 1 : 0);
+        const Vec3 a = geometry::vertex(scene, scene.faces(f, 0)), b = geometry::vertex(scene, scene.faces(f, 1)),
+                   c = geometry::vertex(scene, scene.faces(f, 2));
+        for (int k = 0; k < count; ++k) {
+          const Vec3 p = sample_triangle(engine, a, b, c);
+          if (!coverage[v].keeps(p) || visibility.occluded(p, f, view.direction)) continue;
+          report({p, f, v});
         }
-        const double along_beam = o.noise_sigma_mm > 0 ? noise(engine) : 0;
-        out.add(view.registration_error * (p + along_beam * view.direction), view.registration_error.linear() * normal,
-                p, v, f, false);
       }
     }
+    return out.finish();
   }
+  const SamplerInput input{visibility, o.views, coverage, density, o.spacing_mm, o.seed};
+  for (const SurfaceSample& s : o.sampling == ScanSampling::grid ? grid_samples(input) : poisson_samples(input)) report(s);
   return out.finish();
 }
 

@@ -1,12 +1,16 @@
 // Seen faces by centroid visibility, then their boundary loops; see scan_borders.hpp.
 #include "sim/scan_borders.hpp"
 
+#include <stdexcept>
+
 #include "geometry/edge_adjacency.hpp"
 
 namespace cmm::sim {
 
 std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const std::vector<ScanView>& views,
-                                     double max_incidence_deg) {
+                                     double max_incidence_deg, const std::vector<CoverageBand>& coverage) {
+  if (!coverage.empty() && coverage.size() != views.size())
+    throw std::invalid_argument("scan borders: one coverage band per view, or none");
   const ScanVisibility visibility(scene, max_incidence_deg);
   geometry::TriangleMesh seen{scene.vertices, geometry::Triangles(scene.faces.rows(), 3), {}};
   Eigen::Index kept = 0;
@@ -14,8 +18,9 @@ std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const 
     geometry::Vec3 centroid = geometry::Vec3::Zero();
     for (int k = 0; k < 3; ++k) centroid += geometry::vertex(scene, scene.faces(f, k));
     centroid /= 3;
-    for (const ScanView& view : views)
-      if (visibility.sees(centroid, static_cast<int>(f), view.direction)) {
+    for (std::size_t v = 0; v < views.size(); ++v)
+      if ((coverage.empty() || coverage[v].keeps(centroid)) &&
+          visibility.sees(centroid, static_cast<int>(f), views[v].direction)) {
         seen.faces.row(kept++) = scene.faces.row(f);
         break;
       }

@@ -8,6 +8,7 @@
 #include "geometry/boundary_loops.hpp"
 #include "geometry/mesh.hpp"
 #include "sim/scan_views.hpp"
+#include "sim/view_coverage.hpp"
 #include "sim/visibility.hpp"
 
 namespace cmm::sim {
@@ -19,9 +20,11 @@ struct ScanBorder {
   geometry::Vec3 surface_normal;  // of the seen surface next to the border
 };
 
-// A face counts as seen when some view sees its centroid: the synthesis samples faces area-uniformly,
-// so a seen face of any size has points, and a face half in shadow is split by the border anyway.
+// A face counts as seen when some view sees its centroid (within the view's coverage band, when given:
+// RawScanTruth::coverage, one per view): the synthesis samples faces area-uniformly, so a seen face of
+// any size has points, and a face half in shadow or cut by a band's edge is split by the border anyway.
 std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const std::vector<ScanView>& views,
-                                     double max_incidence_deg = kDefaultMaxIncidenceDeg);
+                                     double max_incidence_deg = kDefaultMaxIncidenceDeg,
+                                     const std::vector<CoverageBand>& coverage = {});
 
 }  // namespace cmm::sim

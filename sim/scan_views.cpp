@@ -58,6 +58,36 @@ std::vector<ScanView> default_views(const ViewSetOptions& o) {
   return views;
 }
 
+std::vector<ScanView> views_with_offset(int count, double offset_mm, std::uint64_t seed, double elevation_deg) {
+  require(count >= 1, "views: count must be >= 1");
+  require(offset_mm >= 0 && std::isfinite(offset_mm), "views: offset_mm must be finite and >= 0");
+  std::vector<ScanView> views = default_views({.around = count - 1,
+                                               .elevation_deg = elevation_deg,
+                                               .from_above = true,
+                                               .rotation_sigma_deg = 0,
+                                               .translation_sigma_mm = 0,
+                                               .seed = seed});
+  // A direction uniform on the sphere: three Gaussians, normalised (a zero draw, never seen, is redrawn).
+  std::mt19937_64 engine(seed);
+  std::normal_distribution<double> gauss(0, 1);
+  for (ScanView& view : views) {
+    geometry::Vec3 direction = geometry::Vec3::Zero();
+    while (direction.norm() < 1e-12)
+      for (int k = 0; k < 3; ++k) direction[k] = gauss(engine);
+    view.registration_error.translation() = offset_mm * direction.normalized();
+  }
+  return views;
+}
+
+std::pair<geometry::Vec3, geometry::Vec3> image_axes(const geometry::Vec3& direction) {
+  int least = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(direction[k]) < std::abs(direction[least])) least = k;
+  const geometry::Vec3 axis = geometry::Vec3::Unit(least);
+  const geometry::Vec3 first = (axis - axis.dot(direction) * direction).normalized();
+  return {first, direction.cross(first)};
+}
+
 void check_views(const std::vector<ScanView>& views, const char* option) {
   require(!views.empty(), std::string(option) + ": no views");
   for (const ScanView& view : views) {

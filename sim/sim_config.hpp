@@ -22,7 +22,7 @@ using geometry::Vec3;
 
 // The true part: one of geometry's analytic parts, or a mesh file (scaled to mm).
 struct PartSource {
-  std::string analytic = "case3_block";  // cube | case3_block | plate_with_holes | bicone | hemisphere_cone
+  std::string analytic = "case3_block";  // one of geometry::analytic_part_names()
   double edge_length_mm = 2;
   std::string mesh_file;  // when set, used instead of `analytic`
   double scale = 1;

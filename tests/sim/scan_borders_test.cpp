@@ -47,5 +47,44 @@ TEST(ScanBorders, CubeSeenFromEverySideButBelowHasOneBorder) {
   EXPECT_NEAR(borders[0].centre.z(), 0, 1e-9);
 }
 
+// The small openings stay openings: each through hole and the slot has one border (where its wall
+// falls into shadow, or its lower rim), besides the underside's outer one.
+TEST(ScanBorders, PlateSmallOpeningsHasABorderPerOpening) {
+  const auto part = geometry::make_analytic_part("plate_small_openings", 2.0);
+  const std::vector<ScanBorder> borders = scan_borders(part.mesh, default_views());
+  int outer = 0, slot = 0, small_hole = 0;
+  for (const ScanBorder& b : borders) {
+    if (b.kind == geometry::LoopKind::outer) {
+      ++outer;
+      EXPECT_NEAR(b.perimeter_mm, 2 * (120 + 80), 1e-6);
+      continue;
+    }
+    slot += std::abs(b.centre.x() - 40) < 1 && std::abs(b.centre.y() - 10) < 1;
+    small_hole += std::hypot(b.centre.x() - 10, b.centre.y() - 70) < 1;
+  }
+  EXPECT_EQ(borders.size(), 8u);
+  EXPECT_EQ(outer, 1);
+  EXPECT_EQ(slot, 1);
+  EXPECT_EQ(small_hole, 1);
+}
+
+// A partial view's border runs along its band's edge: from above, half the cube's top face.
+TEST(ScanBorders, CoverageBandsCutTheSeenRegion) {
+  const auto part = geometry::make_analytic_part("cube", 2.0);
+  const std::vector<ScanView> above{{geometry::Vec3(0, 0, -1)}};
+  ASSERT_EQ(scan_borders(part.mesh, above).size(), 1u);
+  EXPECT_NEAR(scan_borders(part.mesh, above)[0].perimeter_mm, 4 * 40, 1e-6);
+  const ScanVisibility visibility(part.mesh);
+  const std::vector<CoverageBand> half = coverage_bands(visibility, above, 0.5, CoverageMeasure::surface_area, 3);
+  const std::vector<ScanBorder> borders = scan_borders(part.mesh, above, kDefaultMaxIncidenceDeg, half);
+  ASSERT_EQ(borders.size(), 1u);
+  EXPECT_EQ(borders[0].kind, geometry::LoopKind::outer);
+  EXPECT_NEAR(borders[0].centre.z(), 40, 1e-9);
+  // Half a square cut through its middle: 120 mm round when cut along a side, 137 mm across the diagonal;
+  // the mesh's edges step along the cut.
+  EXPECT_GT(borders[0].perimeter_mm, 110);
+  EXPECT_LT(borders[0].perimeter_mm, 160);
+}
+
 }  // namespace
 }  // namespace cmm::sim

@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   bool open_bores = false;
   std::string style = "uniform";
   Tessellation tessellation;
-  app.add_option("PART", name, "cube, case3_block, plate_with_holes, bicone or hemisphere_cone")->required();
+  app.add_option("PART", name, "cube, case3_block, plate_with_holes, plate_small_openings, bicone or hemisphere_cone")->required();
   app.add_option("-o,--output", output, "file to write; the format follows the extension")->required();
   app.add_option("--edge-length", edge_length, "target mesh edge length, mm")->check(CLI::PositiveNumber);
   app.add_option("--tessellation", style, "uniform, cad or slivers")->check(CLI::IsMember({"uniform", "cad", "slivers"}));
