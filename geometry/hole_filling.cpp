@@ -18,6 +18,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "geometry/bin_size.hpp"
 #include "geometry/boundary_loops.hpp"
 #include "geometry/edge_adjacency.hpp"
 #include "geometry/polygon_triangulation.hpp"
@@ -26,6 +27,9 @@ namespace cmm::geometry {
 namespace {
 
 using Face = std::array<int, 3>;
+
+constexpr std::size_t kMaxPatchFaces = 2000;  // a curved patch bigger than this is no gap
+constexpr double kMinPatchAngle = 10 * std::numbers::pi / 180;  // region growing's smallest facet angle
 
 std::uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
@@ -167,6 +171,27 @@ class Filler {
     return false;
   }
 
+  // The widest empty disk a random sample of the loop's local density may leave anywhere on the scan:
+  // among N points of surface density ρ a disk of radius r is empty with probability e^(−πr²ρ), and
+  // with πr²ρ = 2 ln N no such void is expected among about N places but once in N scans. ρ is measured at the loop's vertices (k = 25 raw
+  // neighbours), which a real opening's rim sees on one side only: ρ comes out low there, the void large,
+  // so the rule leans toward closing; an opening stays open when it is wider than twice this.
+  double largest_void(const std::vector<int>& cycle) const {
+    constexpr int k = 25;
+    const auto n = static_cast<double>(raw_.rows());
+    if (n <= k) return 0;
+    std::vector<double> density;
+    std::vector<int> ids;
+    std::vector<double> squared;
+    for (int v : cycle) {
+      index_.nearest(at(v), k, ids, squared);
+      if (ids.size() == static_cast<std::size_t>(k) && squared.back() > 0) density.push_back(k / (std::numbers::pi * squared.back()));
+    }
+    if (density.empty()) return 0;
+    std::nth_element(density.begin(), density.begin() + static_cast<std::ptrdiff_t>(density.size() / 2), density.end());
+    return std::sqrt(2 * std::log(n) / (std::numbers::pi * density[density.size() / 2]));
+  }
+
   // How well the raw cloud lies along a patch: the fraction of its sample points (every ≈ B/2, corners
   // left out: they are mesh vertices) that have a raw point within reach, and the farthest any sample
   // is from the cloud (the radius of the largest gap the patch covers).
@@ -248,7 +273,8 @@ class Filler {
     // Backed nearly everywhere, or a gap no wider than the scan's own sampling voids (a random scan
     // leaves empty disks of about B; a real opening is empty across its whole width).
     const Support backing = support(faces);
-    const bool backed = backing.backed >= options_.min_support || backing.widest_gap_mm <= options_.max_gap_bins * bin_;
+    const bool backed = backing.backed >= options_.min_support ||
+                        backing.widest_gap_mm <= std::max(options_.max_gap_bins * bin_, largest_void(cycle));
     say(cycle, perimeter, backed ? how : "unsupported", backing.backed);
     if (!backed) {
       extra_.resize(before);
@@ -292,9 +318,102 @@ class Filler {
     std::vector<Face> faces;
     if (newell.norm() > 0 && off_plane <= options_.flatness_bins * bin_ + 3 * options_.noise_sigma_mm && clip(cycle, newell.normalized(), x, faces))
       return commit(faces, {}, cycle, perimeter, "filled flat");
+    // Curved, or across a crease the two-plane fill could not split: on the raw surface, if it is there.
+    if (fill_curved(cycle, x, perimeter)) return true;
     say(cycle, perimeter, bent ? "across a crease, not filled" : "not flat, an outline, not simple or no fresh diagonal", 0);
     failed_.push_back(cycle);
     return false;
+  }
+
+  // Where the raw surface crosses the line through p along n: the median offset of the raw points
+  // within B of that line (p itself when none are).
+  Vec3 onto_raw(const Vec3& p, const Vec3& n, double reach) const {
+    std::vector<double> along;
+    const std::vector<int> near = index_.within(p, reach);
+    // Nearest the line first: on a curved surface the points farther off it lie toward its concave side.
+    for (double width : {0.5 * bin_, bin_}) {
+      for (int id : near) {
+        const Vec3 d = raw_.row(id).transpose() - p;
+        const double t = d.dot(n);
+        if ((d - t * n).norm() <= width) along.push_back(t);
+      }
+      if (along.size() >= 3) break;
+      along.clear();
+    }
+    if (along.empty()) return p;
+    std::nth_element(along.begin(), along.begin() + static_cast<std::ptrdiff_t>(along.size() / 2), along.end());
+    return p + along[along.size() / 2] * n;
+  }
+
+  // A fan from a centre vertex on the raw surface, then halved until no edge is longer than the
+  // growth's own (√6 B), each new vertex put onto the raw surface along the loop's normal: a flat patch
+  // over a curved loop would lie off the surface by its sagitta.
+  bool fill_curved(const std::vector<int>& cycle, const std::vector<Vec3>& x, double perimeter) {
+    const std::size_t n = cycle.size();
+    Vec3 centre = Vec3::Zero(), normal = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) centre += x[i] / static_cast<double>(n), normal += normals_[cycle[i]];
+    if (!(normal.norm() > 0)) return false;
+    normal.normalize();
+    // As in clip: the surface lies left of a hole's loop; a patch over an outline would be a second sheet.
+    Vec3 newell = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) newell += x[i].cross(x[(i + 1) % n]);
+    if (!(normal.dot(newell) < 0)) return false;
+    double radius = 0;
+    for (const Vec3& p : x) radius = std::max(radius, (p - centre).norm());
+    // The fan must see the loop as a star around the centre: every side turns the same way about it.
+    const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+    double turn = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 a = x[i] - centre, b = x[(i + 1) % n] - centre;
+      const double step = std::atan2(a.dot(t1) * b.dot(t2) - a.dot(t2) * b.dot(t1), a.dot(t1) * b.dot(t1) + a.dot(t2) * b.dot(t2));
+      if (turn != 0 && (step > 0) != (turn > 0)) return false;
+      turn += step;
+    }
+    if (std::abs(std::abs(turn) - 2 * std::numbers::pi) > 0.1) return false;
+    const int base = old_vertices_ + static_cast<int>(extra_.size());
+    std::vector<Vec3> points{onto_raw(centre, normal, radius + bin_)};
+    const auto position = [&](int id) { return id >= base ? points[static_cast<std::size_t>(id - base)] : at(id); };
+    std::vector<Face> faces;
+    for (std::size_t i = 0; i < n; ++i) faces.push_back({base, cycle[(i + 1) % n], cycle[i]});  // against the loop
+    // Longest-edge bisection, both facets of a halved edge at once, so the patch stays conforming; the
+    // loop's own sides stay whole (the facets beside them are the mesh's).
+    const double longest = kMaxEdgeBins * bin_;
+    for (std::size_t splits = 0; splits < 4 * kMaxPatchFaces; ++splits) {
+      int a = -1, b = -1;
+      double worst = longest;
+      for (const Face& f : faces)
+        for (int k = 0; k < 3; ++k) {
+          const int u = f[k], v = f[(k + 1) % 3];
+          const double length = (position(u) - position(v)).norm();
+          if (length > worst && (u >= base || v >= base)) worst = length, a = u, b = v;
+        }
+      if (a < 0) break;
+      if (faces.size() > kMaxPatchFaces) return false;
+      points.push_back(onto_raw(0.5 * (position(a) + position(b)), normal, radius + bin_));
+      const int m = base + static_cast<int>(points.size()) - 1;
+      std::vector<Face> next;
+      for (const Face& f : faces) {
+        int k = 0;
+        while (k < 3 && !((f[k] == a && f[(k + 1) % 3] == b) || (f[k] == b && f[(k + 1) % 3] == a))) ++k;
+        if (k == 3) {
+          next.push_back(f);
+          continue;
+        }
+        const int u = f[k], v = f[(k + 1) % 3], w = f[(k + 2) % 3];
+        next.push_back({u, m, w});
+        next.push_back({m, v, w});
+      }
+      faces = std::move(next);
+    }
+    // No sliver: the growth's own smallest angle holds for the patch too.
+    for (const Face& f : faces) {
+      const Vec3 p[3] = {position(f[0]), position(f[1]), position(f[2])};
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 u = p[(k + 1) % 3] - p[k], w = p[(k + 2) % 3] - p[k];
+        if (u.cross(w).norm() < std::sin(kMinPatchAngle) * u.norm() * w.norm()) return false;
+      }
+    }
+    return commit(faces, points, cycle, perimeter, "filled curved");
   }
 
   // Two faces: each side's vertices by the nearer plane, which must take one run of the loop each; the
