@@ -156,10 +156,10 @@ BinSize bin_size_for_tolerance(const Points& points, const std::vector<LocalSurf
   if (best == n || hidden_bin < bin_for_edge_length(region[best])) {
     if (hidden_bin < cap) {
       // The hidden curvature is a bound, not a measurement: a bin below the sampling floor buys no
-      // accuracy, only empty bins (pinholes). A measured curvature still wins: where it allows less
-      // than the floor, the scan is sparse for ε where it curves, and B stays where ε and the noise put it.
+      // accuracy, only empty bins (pinholes). A measured curvature still wins: B rises toward the floor
+      // but never beyond what the most curved region allows at ε.
       const double measured = best == n ? infinity : bin_for_edge_length(region[best]);
-      const double bin = result.sampling_floor_mm <= measured ? std::max(hidden_bin, result.sampling_floor_mm) : hidden_bin;
+      const double bin = std::max(hidden_bin, std::min(result.sampling_floor_mm, measured));
       result.bin_mm = bin;
       result.edge_length_mm = kMaxEdgeBins * bin;
       result.noise_limited = true;
@@ -170,7 +170,7 @@ BinSize bin_size_for_tolerance(const Points& points, const std::vector<LocalSurf
                              "noise in a region of %zu points, and B allows it everywhere",
                              eps, hidden_k, region_size);
       if (result.sampling_limited)
-        result.source += format("; raised to %s", floor_text.c_str());
+        result.source += format("; raised to %s", result.sampling_floor_mm <= measured ? floor_text.c_str() : "what the most curved region allows");
       return result;
     }
     if (best == n) {

@@ -360,21 +360,29 @@ class Filler {
     if (!(normal.dot(newell) < 0)) return false;
     double radius = 0;
     for (const Vec3& p : x) radius = std::max(radius, (p - centre).norm());
-    // The fan must see the loop as a star around the centre: every side turns the same way about it.
-    const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
-    double turn = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3 a = x[i] - centre, b = x[(i + 1) % n] - centre;
-      const double step = std::atan2(a.dot(t1) * b.dot(t2) - a.dot(t2) * b.dot(t1), a.dot(t1) * b.dot(t1) + a.dot(t2) * b.dot(t2));
-      if (turn != 0 && (step > 0) != (turn > 0)) return false;
-      turn += step;
-    }
-    if (std::abs(std::abs(turn) - 2 * std::numbers::pi) > 0.1) return false;
     const int base = old_vertices_ + static_cast<int>(extra_.size());
-    std::vector<Vec3> points{onto_raw(centre, normal, radius + bin_)};
+    std::vector<Vec3> points;
     const auto position = [&](int id) { return id >= base ? points[static_cast<std::size_t>(id - base)] : at(id); };
     std::vector<Face> faces;
-    for (std::size_t i = 0; i < n; ++i) faces.push_back({base, cycle[(i + 1) % n], cycle[i]});  // against the loop
+    // A fan from a centre on the raw surface where the loop is a star around it (every side turns the
+    // same way about it), else ear clipping seen along the loop's normal where that polygon is simple.
+    const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+    double turn = 0;
+    bool star = true;
+    for (std::size_t i = 0; i < n && star; ++i) {
+      const Vec3 a = x[i] - centre, b = x[(i + 1) % n] - centre;
+      const double step = std::atan2(a.dot(t1) * b.dot(t2) - a.dot(t2) * b.dot(t1), a.dot(t1) * b.dot(t1) + a.dot(t2) * b.dot(t2));
+      star = turn == 0 || (step > 0) == (turn > 0);
+      turn += step;
+    }
+    if (star && std::abs(std::abs(turn) - 2 * std::numbers::pi) <= 0.1) {
+      points.push_back(onto_raw(centre, normal, radius + bin_));
+      for (std::size_t i = 0; i < n; ++i) faces.push_back({base, cycle[(i + 1) % n], cycle[i]});  // against the loop
+    } else if (!clip(cycle, normal, x, faces)) {
+      return false;
+    }
+    std::unordered_set<std::uint64_t> sides;
+    for (std::size_t i = 0; i < n; ++i) sides.insert(edge_key(cycle[i], cycle[(i + 1) % n]));
     // Longest-edge bisection, both facets of a halved edge at once, so the patch stays conforming; the
     // loop's own sides stay whole (the facets beside them are the mesh's).
     const double longest = kMaxEdgeBins * bin_;
@@ -385,7 +393,7 @@ class Filler {
         for (int k = 0; k < 3; ++k) {
           const int u = f[k], v = f[(k + 1) % 3];
           const double length = (position(u) - position(v)).norm();
-          if (length > worst && (u >= base || v >= base)) worst = length, a = u, b = v;
+          if (length > worst && !sides.contains(edge_key(u, v))) worst = length, a = u, b = v;
         }
       if (a < 0) break;
       if (faces.size() > kMaxPatchFaces) return false;
@@ -584,18 +592,27 @@ HoleFilling fill_false_holes(TriangleMesh& mesh, const Points& raw, const CloudI
                              const HoleFillingOptions& options) {
   HoleFilling out;
   if (mesh.faces.rows() == 0 || raw.rows() == 0 || !(options.bin_mm > 0) || !std::isfinite(options.bin_mm)) return out;
-  for (int round = 0; round < options.rounds; ++round) {
+  // Rounds past options.rounds recut only the small failed loops: a pinhole of a few facets whose rim
+  // folds (no fresh diagonal, a slit) is no crease to misplace.
+  for (int round = 0; round < options.rounds + options.small_loop_rounds; ++round) {
     Filler filler(mesh, raw, raw_index, options);
     const HoleFilling r = filler.run();
     out.loops_examined += r.loops_examined;
     out.loops_filled += r.loops_filled;
     out.faces_added += r.faces_added;
     out.vertices_added += r.vertices_added;
-    if (filler.failed_.empty() || round + 1 >= options.rounds) break;
+    std::vector<std::vector<int>> recut;
+    for (const auto& cycle : filler.failed_) {
+      double perimeter = 0;
+      for (std::size_t i = 0; i < cycle.size(); ++i)
+        perimeter += (vertex(mesh, cycle[(i + 1) % cycle.size()]) - vertex(mesh, cycle[i])).norm();
+      if (round + 1 < options.rounds || perimeter <= options.small_loop_bins * options.bin_mm) recut.push_back(cycle);
+    }
+    if (recut.empty() || round + 1 >= options.rounds + options.small_loop_rounds) break;
     // A loop no patch closes has a ragged rim (facets folded by the noise, a sliver fan): its vertices'
     // facets go, and the next round fills the wider, cleaner loop. Their vertices may be left unused.
     std::unordered_set<int> rim;
-    for (const auto& cycle : filler.failed_) rim.insert(cycle.begin(), cycle.end());
+    for (const auto& cycle : recut) rim.insert(cycle.begin(), cycle.end());
     Triangles kept(mesh.faces.rows(), 3);
     Eigen::Index count = 0;
     for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)

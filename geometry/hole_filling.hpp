@@ -22,6 +22,9 @@ struct HoleFillingOptions {
   // than one closes more loops on the case-3 scan (22 left instead of 52) but the wider patches misplace
   // edges by up to 0.14 mm, so one is the default.
   int rounds = 1;
+  // Then this many more rounds for the failed loops no longer than small_loop_bins·B alone.
+  int small_loop_rounds = 2;
+  double small_loop_bins = 10;
 };
 
 struct HoleFilling {
