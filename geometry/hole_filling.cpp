@@ -345,60 +345,54 @@ class Filler {
     return p + along[along.size() / 2] * n;
   }
 
-  // A fan from a centre vertex on the raw surface, then halved until no edge is longer than the
-  // growth's own (√6 B), each new vertex put onto the raw surface along the loop's normal: a flat patch
-  // over a curved loop would lie off the surface by its sagitta.
-  bool fill_curved(const std::vector<int>& cycle, const std::vector<Vec3>& x, double perimeter) {
+  // Ids of new patch vertices: after the mesh's and those patches already added.
+  int patch_base() const { return old_vertices_ + static_cast<int>(extra_.size()); }
+  Vec3 patch_position(int id, const std::vector<Vec3>& points) const {
+    return id >= patch_base() ? points[static_cast<std::size_t>(id - patch_base())] : at(id);
+  }
+
+  // A fan from `apex` (a new vertex, appended to points) where the loop is a star around it in the plane
+  // `flat` maps it to (every side turns the same way about the apex, once round).
+  template <class Flat>
+  bool fan(const std::vector<int>& cycle, const std::vector<Vec3>& x, const Vec3& apex, Flat&& flat,
+           std::vector<Face>& faces, std::vector<Vec3>& points) const {
     const std::size_t n = cycle.size();
-    Vec3 centre = Vec3::Zero(), normal = Vec3::Zero();
-    for (std::size_t i = 0; i < n; ++i) centre += x[i] / static_cast<double>(n), normal += normals_[cycle[i]];
-    if (!(normal.norm() > 0)) return false;
-    normal.normalize();
-    // As in clip: the surface lies left of a hole's loop; a patch over an outline would be a second sheet.
-    Vec3 newell = Vec3::Zero();
-    for (std::size_t i = 0; i < n; ++i) newell += x[i].cross(x[(i + 1) % n]);
-    if (!(normal.dot(newell) < 0)) return false;
-    double radius = 0;
-    for (const Vec3& p : x) radius = std::max(radius, (p - centre).norm());
-    const int base = old_vertices_ + static_cast<int>(extra_.size());
-    std::vector<Vec3> points;
-    const auto position = [&](int id) { return id >= base ? points[static_cast<std::size_t>(id - base)] : at(id); };
-    std::vector<Face> faces;
-    // A fan from a centre on the raw surface where the loop is a star around it (every side turns the
-    // same way about it), else ear clipping seen along the loop's normal where that polygon is simple.
-    const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+    const Eigen::Vector2d centre = flat(apex);
     double turn = 0;
-    bool star = true;
-    for (std::size_t i = 0; i < n && star; ++i) {
-      const Vec3 a = x[i] - centre, b = x[(i + 1) % n] - centre;
-      const double step = std::atan2(a.dot(t1) * b.dot(t2) - a.dot(t2) * b.dot(t1), a.dot(t1) * b.dot(t1) + a.dot(t2) * b.dot(t2));
-      star = turn == 0 || (step > 0) == (turn > 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector2d a = flat(x[i]) - centre, b = flat(x[(i + 1) % n]) - centre;
+      const double step = std::atan2(cross2(a, b), a.dot(b));
+      if (turn != 0 && (step > 0) != (turn > 0)) return false;
       turn += step;
     }
-    if (star && std::abs(std::abs(turn) - 2 * std::numbers::pi) <= 0.1) {
-      points.push_back(onto_raw(centre, normal, radius + bin_));
-      for (std::size_t i = 0; i < n; ++i) faces.push_back({base, cycle[(i + 1) % n], cycle[i]});  // against the loop
-    } else if (!clip(cycle, normal, x, faces)) {
-      return false;
-    }
+    if (std::abs(std::abs(turn) - 2 * std::numbers::pi) > 0.1) return false;
+    const int id = patch_base() + static_cast<int>(points.size());
+    points.push_back(apex);
+    for (std::size_t i = 0; i < n; ++i) faces.push_back({id, cycle[(i + 1) % n], cycle[i]});  // against the loop
+    return true;
+  }
+
+  // Longest-edge bisection down to the growth's own edge (√6 B), both facets of a halved edge at once so
+  // the patch stays conforming, each new vertex placed by `place`; the loop's own sides stay whole (the
+  // facets beside them are the mesh's). False when the patch would outgrow kMaxPatchFaces.
+  template <class Place>
+  bool refine(const std::vector<int>& cycle, std::vector<Face>& faces, std::vector<Vec3>& points, Place&& place) const {
     std::unordered_set<std::uint64_t> sides;
-    for (std::size_t i = 0; i < n; ++i) sides.insert(edge_key(cycle[i], cycle[(i + 1) % n]));
-    // Longest-edge bisection, both facets of a halved edge at once, so the patch stays conforming; the
-    // loop's own sides stay whole (the facets beside them are the mesh's).
+    for (std::size_t i = 0; i < cycle.size(); ++i) sides.insert(edge_key(cycle[i], cycle[(i + 1) % cycle.size()]));
     const double longest = kMaxEdgeBins * bin_;
-    for (std::size_t splits = 0; splits < 4 * kMaxPatchFaces; ++splits) {
+    while (true) {
       int a = -1, b = -1;
       double worst = longest;
       for (const Face& f : faces)
         for (int k = 0; k < 3; ++k) {
           const int u = f[k], v = f[(k + 1) % 3];
-          const double length = (position(u) - position(v)).norm();
+          const double length = (patch_position(u, points) - patch_position(v, points)).norm();
           if (length > worst && !sides.contains(edge_key(u, v))) worst = length, a = u, b = v;
         }
-      if (a < 0) break;
+      if (a < 0) return true;
       if (faces.size() > kMaxPatchFaces) return false;
-      points.push_back(onto_raw(0.5 * (position(a) + position(b)), normal, radius + bin_));
-      const int m = base + static_cast<int>(points.size()) - 1;
+      points.push_back(place(0.5 * (patch_position(a, points) + patch_position(b, points))));
+      const int m = patch_base() + static_cast<int>(points.size()) - 1;
       std::vector<Face> next;
       for (const Face& f : faces) {
         int k = 0;
@@ -413,15 +407,89 @@ class Filler {
       }
       faces = std::move(next);
     }
-    // No sliver: the growth's own smallest angle holds for the patch too.
+  }
+
+  // No sliver: the growth's own smallest angle holds for a patch too.
+  bool angles_above_minimum(const std::vector<Face>& faces, const std::vector<Vec3>& points) const {
     for (const Face& f : faces) {
-      const Vec3 p[3] = {position(f[0]), position(f[1]), position(f[2])};
+      const Vec3 p[3] = {patch_position(f[0], points), patch_position(f[1], points), patch_position(f[2], points)};
       for (int k = 0; k < 3; ++k) {
         const Vec3 u = p[(k + 1) % 3] - p[k], w = p[(k + 2) % 3] - p[k];
         if (u.cross(w).norm() < std::sin(kMinPatchAngle) * u.norm() * w.norm()) return false;
       }
     }
+    return true;
+  }
+
+  // A curved loop off any crease: a fan from a centre on the raw surface where the loop is a star around
+  // it, else ear clipping seen along its normal, then refined with each new vertex put onto the raw
+  // surface along the loop's normal: a flat patch over a curved loop would lie off it by its sagitta.
+  bool fill_curved(const std::vector<int>& cycle, const std::vector<Vec3>& x, double perimeter) {
+    const std::size_t n = cycle.size();
+    Vec3 centre = Vec3::Zero(), normal = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) centre += x[i] / static_cast<double>(n), normal += normals_[cycle[i]];
+    if (!(normal.norm() > 0)) return false;
+    normal.normalize();
+    // As in clip: the surface lies left of a hole's loop; a patch over an outline would be a second sheet.
+    Vec3 newell = Vec3::Zero();
+    for (std::size_t i = 0; i < n; ++i) newell += x[i].cross(x[(i + 1) % n]);
+    if (!(normal.dot(newell) < 0)) return false;
+    double radius = 0;
+    for (const Vec3& p : x) radius = std::max(radius, (p - centre).norm());
+    const auto onto_surface = [&](const Vec3& p) { return onto_raw(p, normal, radius + bin_); };
+    std::vector<Face> faces;
+    std::vector<Vec3> points;
+    const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+    const auto seen = [&](const Vec3& p) { return Eigen::Vector2d(p.dot(t1), p.dot(t2)); };
+    if (!fan(cycle, x, onto_surface(centre), seen, faces, points)) {
+      faces.clear(), points.clear();
+      if (!clip(cycle, normal, x, faces)) return false;
+    }
+    if (!refine(cycle, faces, points, onto_surface) || !angles_above_minimum(faces, points)) return false;
     return commit(faces, points, cycle, perimeter, "filled curved");
+  }
+
+  // Where the two faces' runs cannot be clipped apart (a loop that wiggles across the crease, sides
+  // that are no single runs): a fan from the crease line's point nearest the loop's centre, which lies on
+  // both planes, so each facet whose loop side lies on one face lies in that face's plane and the edge
+  // stays sharp; halved longest edge first down to √6 B, each new vertex onto the nearer plane.
+  bool crease_fan(const std::vector<int>& cycle, const std::vector<Vec3>& x, const Vec3 (&normal)[2], const double (&offset)[2],
+                  double perimeter) {
+    const std::size_t n = cycle.size();
+    const double c = normal[0].dot(normal[1]), det = 1 - c * c;
+    if (det < 1e-6) return false;
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& p : x) centre += p / static_cast<double>(n);
+    const double r0 = offset[0] - normal[0].dot(centre), r1 = offset[1] - normal[1].dot(centre);
+    const Vec3 apex = centre + (r0 - c * r1) / det * normal[0] + (r1 - c * r0) / det * normal[1];
+    if ((apex - centre).norm() > 0.5 * perimeter / std::numbers::pi + bin_) return false;  // the line misses the loop
+    const auto onto_faces = [&](const Vec3& p) {
+      const double d0 = normal[0].dot(p) - offset[0], d1 = normal[1].dot(p) - offset[1];
+      return Vec3(std::abs(d0) <= std::abs(d1) ? p - d0 * normal[0] : p - d1 * normal[1]);
+    };
+    // The two faces unfolded about the crease line into one plane: (along the line, across it), face 0
+    // on the positive side. A loop that wiggles across the crease stays a star there.
+    const Vec3 along = normal[0].cross(normal[1]).normalized();
+    Vec3 into[2] = {along.cross(normal[0]), along.cross(normal[1])};
+    for (int k = 0; k < 2; ++k) {
+      double sum = 0;
+      for (const Vec3& p : x) {
+        const double d0 = std::abs(normal[0].dot(p) - offset[0]), d1 = std::abs(normal[1].dot(p) - offset[1]);
+        if ((k == 0) == (d0 <= d1)) sum += (p - apex).dot(into[k]);
+      }
+      if (sum < 0) into[k] = -into[k];
+    }
+    const auto unfolded = [&](const Vec3& p) {
+      const Vec3 d = p - apex;
+      const bool first = std::abs(normal[0].dot(p) - offset[0]) <= std::abs(normal[1].dot(p) - offset[1]);
+      return Eigen::Vector2d(d.dot(along), first ? d.dot(into[0]) : -d.dot(into[1]));
+    };
+    std::vector<Face> faces;
+    std::vector<Vec3> points;
+    if (!fan(cycle, x, apex, unfolded, faces, points) || !refine(cycle, faces, points, onto_faces) ||
+        !angles_above_minimum(faces, points))
+      return false;
+    return commit(faces, points, cycle, perimeter, "filled by a fan from the crease");
   }
 
   // Two faces: each side's vertices by the nearer plane, which must take one run of the loop each; the
@@ -495,7 +563,7 @@ class Filler {
         ++switches;
         if (side[i] == 0) first = i;
       }
-    if (switches != 2) return false;
+    if (switches != 2) return crease_fan(cycle, x, normal, offset, perimeter);
     std::vector<int> run[2];
     std::vector<Vec3> run_x[2];
     for (std::size_t s = 0; s < n; ++s) {
@@ -503,7 +571,8 @@ class Filler {
       run[side[i]].push_back(cycle[i]);
       run_x[side[i]].push_back(x[i]);
     }
-    if (run[0].size() < 2 || run[1].size() < 2) return false;  // a lone vertex off the face is noise, not a side
+    // A lone vertex off the face is noise, not a side.
+    if (run[0].size() < 2 || run[1].size() < 2) return crease_fan(cycle, x, normal, offset, perimeter);
     const double c = normal[0].dot(normal[1]), det = 1 - c * c;
     if (det < 1e-6) return false;
     const auto on_line = [&](const Vec3& p) {  // the point of the crease line nearest p
@@ -561,7 +630,8 @@ class Filler {
       if (poly[k].size() < 3) return false;
     }
     std::vector<Face> faces;
-    if (!clip(poly[0], normal[0], poly_x[0], faces) || !clip(poly[1], normal[1], poly_x[1], faces)) return false;
+    if (!clip(poly[0], normal[0], poly_x[0], faces) || !clip(poly[1], normal[1], poly_x[1], faces))
+      return crease_fan(cycle, x, normal, offset, perimeter);
     // A new crossing point lies off the loop side it stands for: that side's twin is a facet to it.
     if (new1) faces.push_back({run[1].front(), run[0].back(), x1});
     if (new2) faces.push_back({run[0].front(), run[1].back(), x2});
