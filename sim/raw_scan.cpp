@@ -5,6 +5,8 @@
 #include "sim/raw_scan.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <numeric>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -16,6 +18,8 @@ namespace cmm::sim {
 namespace {
 
 using geometry::Vec3;
+
+constexpr double kMaxScanDraws = 2e8;  // about 6 GB of points, normals and truth
 
 void check(const RawScanOptions& o) {
   if (!(o.spacing_mm > 0) || !std::isfinite(o.spacing_mm))
@@ -85,6 +89,18 @@ RawScan synthesize_raw_scan(const geometry::TriangleMesh& scene, const RawScanOp
   const geometry::FaceGeometry& faces = visibility.face_geometry();
   Collector out;
   if (scene.faces.rows() == 0) return out.finish();
+  {
+    // Bounded work: every view on every face is more than any scan draws (Poisson draws 5× that).
+    double draws = 0;
+    for (std::size_t v = 0; v < o.views.size(); ++v) draws += o.view_density.empty() ? 1 : o.view_density[v];
+    draws *= std::accumulate(faces.areas.begin(), faces.areas.end(), 0.0) / (o.spacing_mm * o.spacing_mm) * (o.sampling == ScanSampling::poisson ? 5 : 1);
+    if (!(draws <= kMaxScanDraws)) {
+      char text[200];
+      std::snprintf(text, sizeof text, "raw scan: spacing_mm %g and view_density ask for about %.3g samples, more than the %.0f "
+                    "a synthesized scan may draw", o.spacing_mm, draws, kMaxScanDraws);
+      throw std::invalid_argument(text);
+    }
+  }
   out.truth.coverage = coverage_bands(visibility, o.views, o.view_coverage,
                                       o.sampling == ScanSampling::grid ? CoverageMeasure::image_area : CoverageMeasure::surface_area,
                                       o.seed);

@@ -240,6 +240,9 @@ TEST(ScanSampling, BadOptionsNameTheOption) {
   EXPECT_NE(message({.view_density = std::vector<double>(7, 0.0)}).find("view_density"), std::string::npos);
   EXPECT_NE(message({.sampling = static_cast<ScanSampling>(7)}).find("sampling"), std::string::npos);
   EXPECT_NE(message({.noise_model = static_cast<ScanNoise>(7)}).find("noise_model"), std::string::npos);
+  // Work no request may ask for: a density factor of 1e300 or a spacing of 1 nm is refused, not overflowed.
+  EXPECT_NE(message({.view_density = {1e300, 1, 1, 1, 1, 1, 1}}).find("a synthesized scan may draw"), std::string::npos);
+  EXPECT_NE(message({.spacing_mm = 1e-6}).find("a synthesized scan may draw"), std::string::npos);
 }
 
 }  // namespace
