@@ -8,6 +8,7 @@
 
 #include "geometry/edge_point.hpp"
 #include "geometry/feature_extractor.hpp"
+#include "geometry/wall_hole.hpp"
 
 namespace cmm::geometry::detail {
 
@@ -60,6 +61,21 @@ std::vector<int> Extractor::bores(SideRegionFinder& finder, std::vector<Rim>& ri
     hole.radius = entry->circle.radius;
     hole.perimeter = model_.features.curves[entry->curve].length;
     hole.roundness_mm = entry->circle.roundness_mm;
+    // A noisy mesh rounds the rim's crease, so the rim's circle is smaller than the bore: a straight
+    // wall's own circle is the diameter (a drafted one's varies along it, and the rim's stands).
+    std::vector<int> round_axis;  // the patch's facets facing the rim's axis from about its radius
+    for (int f : wall_faces[key]) {
+      Vec3 to_axis = hole.centre - face_centroid(mesh_, f);
+      to_axis -= to_axis.dot(hole.axis) * hole.axis;
+      const double d = to_axis.norm();
+      if (d > 0.5 * hole.radius && d < 1.5 * hole.radius && faces_.normals.row(f).dot(to_axis.transpose()) > 0.5 * d) round_axis.push_back(f);
+    }
+    if (model_.features.noisy && entry->draft == 0)
+      if (const std::optional<Circle3> wall = wall_circle(mesh_, faces_, wall_middle(mesh_, round_axis, hole.axis, kRimZoneMm), hole.axis)) {
+        hole.centre = wall->centre + (hole.centre - wall->centre).dot(hole.axis) * hole.axis;
+        hole.radius = wall->radius;
+        hole.roundness_mm = wall->roundness_mm;
+      }
     // Depth: between the fitted planes of the bore's two rims (a through hole, or a blind hole's
     // entry and bottom); with one rim, over the wall itself, trimming the 2 % extremes that
     // noise makes.
@@ -119,17 +135,24 @@ void Extractor::fit_wall_axis(Rim& rim, const std::vector<int>& wall) const {
   rim.axis_covariance = covariance;
 }
 
-// The wall's mean tilt along the axis over the whole bore: the folds along its two rims lean
-// opposite ways and cancel. Taken as zero (a cylinder) unless 3 standard errors away from it.
-void Extractor::measure_wall_draft(Rim& rim, const std::vector<int>& wall) const {
+// The wall's mean tilt along the axis over the whole bore. Taken as zero (a cylinder) unless 3 standard
+// errors away from it.
+void Extractor::measure_wall_draft(Rim& rim, const std::vector<int>& patch) const {
+  const auto radial = [&](int f) {
+    Vec3 to_axis = rim.circle.centre - face_centroid(mesh_, f);
+    to_axis -= to_axis.dot(rim.axis) * rim.axis;
+    return faces_.normals.row(f).dot(to_axis.normalized().transpose());
+  };
+  std::vector<int> wall;
+  for (int f : patch)
+    if (radial(f) >= 0.5) wall.push_back(f);
+  // A noisy mesh rounds the wall into its rims, and where the scan saw one rim those folds do not
+  // cancel against the other's: they are left out.
+  if (model_.features.noisy) wall = wall_middle(mesh_, wall, rim.axis, kRimZoneMm);
   double w_sum = 0, w2_sum = 0, sum = 0, squares = 0;
   for (int f : wall) {
     const Vec3 n = faces_.normals.row(f).transpose();
-    Vec3 to_axis = rim.circle.centre - face_centroid(mesh_, f);
-    to_axis -= to_axis.dot(rim.axis) * rim.axis;
-    const double radial = n.dot(to_axis.normalized());
-    if (radial < 0.5) continue;  // not wall
-    const double w = faces_.areas[f], draft = n.dot(rim.axis) / radial;
+    const double w = faces_.areas[f], draft = n.dot(rim.axis) / radial(f);
     w_sum += w, w2_sum += w * w, sum += w * draft, squares += w * draft * draft;
   }
   if (w_sum <= 0) return;

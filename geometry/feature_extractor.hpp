@@ -12,6 +12,7 @@
 #include "geometry/feature_model.hpp"
 #include "geometry/polyline_sampling.hpp"
 #include "geometry/side_normal.hpp"
+#include "geometry/wall_hole.hpp"
 
 namespace cmm::geometry::detail {
 
@@ -76,6 +77,8 @@ class Extractor {
                  const std::optional<Circle3>& rim) const;
   void emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole);
   void emit_loop_points(SideRegionFinder& finder, int loop_index);
+  void add_wall_hole(const WallHole& wall);
+  void adopt_wall_hole_rims();
   double distinct_sides_rad() const { return 0.5 * options_.features.angle_deg * std::numbers::pi / 180; }
   // bore_detection.cpp
   std::optional<Rim> bore_rim(int curve, const Circle3& circle, const std::vector<CurveSample>& samples);
@@ -94,6 +97,10 @@ class Extractor {
   FeatureModel model_;
   double noise_radius_ = 0, noise_along_ = 0;  // the neighbourhood the vertex noise asks for, mm
   int half_window_ = 0;
+  std::vector<int> wall_holes_;  // ids of the holes found from their walls' borders
+  // A rim point of a hole seen from its wall lies this close to the entry circle (or a tenth of the
+  // radius): the crease's rounding and the noise move it by about half a bin.
+  static constexpr double kWallRimReachMm = 0.3;
 };
 
 }  // namespace cmm::geometry::detail

@@ -90,6 +90,7 @@ FeatureModel Extractor::run() {
     options_.cancel.throw_if_requested("the boundary loops");
     emit_loop_points(finder, static_cast<int>(l));
   }
+  adopt_wall_hole_rims();
   if (!model_.points.empty()) {
     std::vector<double> sigmas;
     for (const EdgePoint& p : model_.points) sigmas.push_back(p.position_sigma_mm);
@@ -317,7 +318,9 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
   const std::vector<Vec3> points = smooth_curve(raw, true, rim, noise_gain);
   std::optional<Hole> hole;
   if (loop.kind == LoopKind::hole) {
-    if (rim) {
+    if (const std::optional<WallHole> wall = wall_hole(mesh_, adjacency_, faces_, loop, options_.circle_tolerance)) {
+      add_wall_hole(*wall);  // the loop is the seen wall's border, not a rim: its points stay boundary
+    } else if (rim) {
       const Circle3& circle = *rim;
       hole = Hole{};
       hole->id = static_cast<int>(model_.holes.size());
@@ -373,6 +376,45 @@ void Extractor::emit_loop_points(SideRegionFinder& finder, int loop_index) {
     model_.points.push_back(p);
   }
   if (hole) model_.holes.push_back(*hole);
+}
+
+// A hole seen from its wall: unless a bore on the same axis line is already in the model (its rim a
+// closed curve), it is a bore whose wall the mesh holds down to the seen depth.
+void Extractor::add_wall_hole(const WallHole& wall) {
+  for (const Hole& other : model_.holes) {
+    const Vec3 off = other.centre - wall.entry_centre;
+    const double across = (off - off.dot(wall.axis) * wall.axis).norm();
+    if (across <= std::max(0.2, 0.1 * wall.radius) && std::abs(other.radius - wall.radius) <= 0.1 * wall.radius) return;
+  }
+  Hole hole;
+  hole.id = static_cast<int>(model_.holes.size());
+  hole.source = HoleSource::bore;
+  hole.centre = wall.entry_centre;
+  hole.axis = wall.axis;
+  hole.radius = wall.radius;
+  hole.perimeter = 2 * std::numbers::pi * wall.radius;
+  hole.roundness_mm = wall.roundness_mm;
+  hole.depth = wall.seen_depth_mm;
+  wall_holes_.push_back(hole.id);
+  model_.holes.push_back(std::move(hole));
+}
+
+// The entry rim of a hole seen from its wall is a crease the noise broke into pieces (no closed curve
+// made it a bore's rim): the sharp-edge points on its circle are its rim points.
+void Extractor::adopt_wall_hole_rims() {
+  for (int id : wall_holes_) {
+    Hole& hole = model_.holes[static_cast<std::size_t>(id)];
+    const double reach = std::max(kWallRimReachMm, 0.1 * hole.radius);
+    for (EdgePoint& p : model_.points) {
+      if (p.kind != EdgeKind::sharp_edge || p.hole >= 0) continue;
+      const Vec3 off = p.position - hole.centre;
+      const double along = off.dot(hole.axis), radial = (off - along * hole.axis).norm();
+      if (std::abs(along) > reach || std::abs(radial - hole.radius) > reach) continue;
+      p.kind = EdgeKind::hole_rim;
+      p.hole = id;
+      hole.rim_point_ids.push_back(p.id);
+    }
+  }
 }
 
 }  // namespace detail

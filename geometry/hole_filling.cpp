@@ -21,6 +21,7 @@
 #include "geometry/bin_size.hpp"
 #include "geometry/boundary_loops.hpp"
 #include "geometry/edge_adjacency.hpp"
+#include "geometry/least_folding_patch.hpp"
 #include "geometry/polygon_triangulation.hpp"
 
 namespace cmm::geometry {
@@ -30,11 +31,13 @@ using Face = std::array<int, 3>;
 
 constexpr std::size_t kMaxPatchFaces = 2000;  // a curved patch bigger than this is no gap
 constexpr double kMinPatchAngle = 10 * std::numbers::pi / 180;  // region growing's smallest facet angle
+constexpr std::size_t kMaxLeastFoldingLoop = 300;  // O(n³): about 0.1 s at this size
+constexpr double kMaxPatchFold = 160 * std::numbers::pi / 180;  // folding onto itself: an outline's patch
+constexpr double kMinPatchFacing = 0.3;  // mean cosine between the patch's normal and its rim facets'
 
-std::uint64_t edge_key(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
-}
+std::uint64_t directed_key(int from, int to) { return (std::uint64_t(std::uint32_t(from)) << 32) | std::uint32_t(to); }
+
+std::uint64_t edge_key(int a, int b) { return a < b ? directed_key(a, b) : directed_key(b, a); }
 
 double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
@@ -90,6 +93,16 @@ class Filler {
       if (n.norm() > 0) n.normalize();
     dump_ = std::getenv("CMMD_DUMP_FILL") != nullptr;
     for (const BoundaryLoop& loop : boundary_loops(mesh, adjacency)) loops_.push_back(loop.vertices);
+    // The normal of the facet beside each loop side, for the least-folding patch.
+    for (const std::vector<int>& loop : loops_)
+      for (std::size_t i = 0; i < loop.size(); ++i) rim_normals_.emplace(directed_key(loop[i], loop[(i + 1) % loop.size()]), Vec3::Zero());
+    for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const auto side = rim_normals_.find(directed_key(mesh.faces(f, k), mesh.faces(f, (k + 1) % 3)));
+        if (side == rim_normals_.end()) continue;
+        const Vec3 a = vertex(mesh, mesh.faces(f, 0)), b = vertex(mesh, mesh.faces(f, 1)), c = vertex(mesh, mesh.faces(f, 2));
+        side->second = (b - a).cross(c - a).normalized();
+      }
   }
 
   HoleFilling run() {
@@ -236,7 +249,7 @@ class Filler {
     for (const Face& f : faces)
       for (int k = 0; k < 3; ++k) {
         if (f[k] == f[(k + 1) % 3]) return false;
-        const std::uint64_t key = (std::uint64_t(std::uint32_t(f[k])) << 32) | std::uint32_t(f[(k + 1) % 3]);
+        const std::uint64_t key = directed_key(f[k], f[(k + 1) % 3]);
         if (++directed[key] > 1) return false;
       }
     std::unordered_set<std::uint64_t> sides;
@@ -244,18 +257,18 @@ class Filler {
     for (std::size_t i = 0; i < n; ++i) {
       const int a = cycle[i], b = cycle[(i + 1) % n];
       // The loop runs a → b in its facet; the patch must have b → a.
-      if (!directed.contains((std::uint64_t(std::uint32_t(b)) << 32) | std::uint32_t(a))) return false;
+      if (!directed.contains(directed_key(b, a))) return false;
       sides.insert(edge_key(a, b));
     }
     for (const auto& [key, count] : directed) {
       const int from = static_cast<int>(key >> 32), to = static_cast<int>(key & 0xffffffffu);
       const std::uint64_t undirected = edge_key(from, to);
       if (sides.contains(undirected)) {
-        if (directed.contains((std::uint64_t(std::uint32_t(to)) << 32) | std::uint32_t(from))) return false;
+        if (directed.contains(directed_key(to, from))) return false;
         continue;
       }
       if (edges_.contains(undirected)) return false;
-      if (!directed.contains((std::uint64_t(std::uint32_t(to)) << 32) | std::uint32_t(from))) return false;
+      if (!directed.contains(directed_key(to, from))) return false;
     }
     return true;
   }
@@ -320,6 +333,8 @@ class Filler {
       return commit(faces, {}, cycle, perimeter, "filled flat");
     // Curved, or across a crease the two-plane fill could not split: on the raw surface, if it is there.
     if (fill_curved(cycle, x, perimeter)) return true;
+    // A loop folded or tangled by the noise (a ragged strip beside a crease): no plane sees it simple.
+    if (fill_least_folding(cycle, x, perimeter)) return true;
     say(cycle, perimeter, bent ? "across a crease, not filled" : "not flat, an outline, not simple or no fresh diagonal", 0);
     failed_.push_back(cycle);
     return false;
@@ -447,6 +462,53 @@ class Filler {
     }
     if (!refine(cycle, faces, points, onto_surface) || !angles_above_minimum(faces, points)) return false;
     return commit(faces, points, cycle, perimeter, "filled curved");
+  }
+
+  // The least-folding triangulation of the loop's own vertices (Liepa's), refined with each new vertex
+  // onto the raw surface along the patch's normal. A patch that folds back onto its rim, or faces
+  // against it (an outline's: a second sheet over the surface), is refused.
+  bool fill_least_folding(const std::vector<int>& cycle, const std::vector<Vec3>& x, double perimeter) {
+    const std::size_t n = cycle.size();
+    if (n > kMaxLeastFoldingLoop) return false;
+    std::vector<Vec3> rim(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto side = rim_normals_.find(directed_key(cycle[i], cycle[(i + 1) % n]));
+      if (side == rim_normals_.end() || !(side->second.norm() > 0)) return false;
+      rim[i] = side->second;
+    }
+    const auto patch = least_folding_patch(x, rim, [&](int a, int b) {
+      return !edges_.contains(edge_key(cycle[static_cast<std::size_t>(a)], cycle[static_cast<std::size_t>(b)]));
+    });
+    if (!patch) return false;
+    std::vector<Face> faces;
+    Vec3 normal = Vec3::Zero();
+    for (const auto& t : patch->triangles) {
+      faces.push_back({cycle[static_cast<std::size_t>(t[0])], cycle[static_cast<std::size_t>(t[1])], cycle[static_cast<std::size_t>(t[2])]});
+      const Vec3& a = x[static_cast<std::size_t>(t[0])];
+      normal += (x[static_cast<std::size_t>(t[1])] - a).cross(x[static_cast<std::size_t>(t[2])] - a);
+    }
+    if (!(normal.norm() > 0)) return false;
+    normal.normalize();
+    // A hole's patch faces the way its rim does (across a right-angled crease, half of it); an outline's
+    // (a second sheet over the surface) faces against it.
+    double facing = 0;
+    for (const Vec3& r : rim) facing += r.dot(normal) / static_cast<double>(n);
+    if (patch->max_dihedral_rad > kMaxPatchFold || facing < kMinPatchFacing) {
+      say(cycle, perimeter, "least folding patch folds or faces away (deg)", patch->max_dihedral_rad * 180 / std::numbers::pi);
+      return false;
+    }
+    std::vector<Vec3> points;
+    // Beside a crease the line along the patch's normal meets the other face too: a vertex moves at most
+    // B/2, else stays put (a far move would lengthen the edges it was to shorten).
+    const auto place = [&](const Vec3& p) {
+      const Vec3 q = onto_raw(p, normal, bin_);
+      return (q - p).norm() <= 0.5 * bin_ ? q : p;
+    };
+    if (!refine(cycle, faces, points, place)) {
+      say(cycle, perimeter, "least folding patch too big", static_cast<double>(faces.size()));
+      return false;
+    }
+    return commit(faces, points, cycle, perimeter, "filled least folding");
   }
 
   // Where the two faces' runs cannot be clipped apart (a loop that wiggles across the crease, sides
@@ -650,6 +712,7 @@ class Filler {
   int old_vertices_;
   bool dump_ = false;
   std::unordered_set<std::uint64_t> edges_;
+  std::unordered_map<std::uint64_t, Vec3> rim_normals_;  // by the loop side's directed key
   std::vector<Vec3> normals_;
   std::vector<std::vector<int>> loops_;
   std::vector<Face> faces_;

@@ -4,7 +4,8 @@
 // of the seen region exactly, no non-manifold edge, every through hole found with its rim fitted, the
 // mesh within ε + 3σ of the true surface (99th percentile), and the probeable share within 5 points of
 // the same part's grid-scanned plan. Prints a Markdown table; exits 1 when a check fails.
-// SCAN_MATRIX_KEEP=1 keeps each cloud in the temp folder, for cmm-plan.
+// SCAN_MATRIX_KEEP=1 keeps each cloud in the temp folder, for cmm-plan; SCAN_MATRIX_VERBOSE=1 lists each
+// run's borders, loops and holes.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -100,18 +101,22 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
             const std::filesystem::path& dir) {
   const auto start = std::chrono::steady_clock::now();
   Outcome out;
+  // Scanned and held against at 0.25 mm: a coarser scene's chords would be in the truth (a Ø3 hole
+  // meshed at 1 mm is 10 chords, 0.05 mm inside its circle on average, 3 % of its radius).
   const geometry::AnalyticPart part = geometry::make_analytic_part(c.part, 0.25);
-  const geometry::AnalyticPart scene = geometry::make_analytic_part(c.part, 1.0);
   sim::RawScanOptions options = scan_options(c, spacing, offset_mm, strays);
-  sim::RawScan raw = sim::synthesize_raw_scan(scene.mesh, options);
+  sim::RawScan raw = sim::synthesize_raw_scan(part.mesh, options);
   // Fewer points than asked for: a coarser spacing, never a subset (a subset changes the sampling).
   while (max_points > 0 && static_cast<std::size_t>(raw.cloud.points.rows()) > max_points) {
     options.spacing_mm *= std::sqrt(static_cast<double>(raw.cloud.points.rows()) / static_cast<double>(max_points)) * 1.02;
-    raw = sim::synthesize_raw_scan(scene.mesh, options);
+    raw = sim::synthesize_raw_scan(part.mesh, options);
   }
   out.points = static_cast<std::size_t>(raw.cloud.points.rows());
-  const std::vector<sim::ScanBorder> borders =
-      sim::scan_borders(scene.mesh, options.views, sim::kDefaultMaxIncidenceDeg, raw.truth.coverage);
+  // A border round less than four sample spacings (an unseen facet or two of the scene's 0.25 mm
+  // tessellation at the edge of a view) encloses no gap a scan at that spacing can show.
+  std::vector<sim::ScanBorder> borders;
+  for (const sim::ScanBorder& b : sim::scan_borders(part.mesh, options.views, sim::kDefaultMaxIncidenceDeg, raw.truth.coverage))
+    if (b.perimeter_mm >= 4 * options.spacing_mm) borders.push_back(b);
   const std::filesystem::path file = dir / (c.part + "-" + c.sampling + ".ply");
   geometry::write_cloud(file, raw.cloud);
 
@@ -141,6 +146,19 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
     matched[static_cast<std::size_t>(best)] = true;
   }
   out.missed_borders = static_cast<std::size_t>(std::count(matched.begin(), matched.end(), false));
+  if (std::getenv("SCAN_MATRIX_VERBOSE")) {
+    const auto kind = [](geometry::LoopKind k) { return k == geometry::LoopKind::hole ? "hole" : "outer"; };
+    for (std::size_t b = 0; b < borders.size(); ++b)
+      std::printf("border %s %.1f mm at (%.2f %.2f %.2f)%s\n", kind(borders[b].kind), borders[b].perimeter_mm, borders[b].centre.x(),
+                  borders[b].centre.y(), borders[b].centre.z(), matched[b] ? "" : ": no loop");
+    for (const geometry::BoundaryLoop& loop : model.loops) {
+      Vec3 centre = Vec3::Zero();
+      for (int v : loop.vertices) centre += geometry::vertex(reference.mesh, v) / static_cast<double>(loop.vertices.size());
+      std::printf("loop %s %.1f mm at (%.2f %.2f %.2f)\n", kind(loop.kind), loop.perimeter, centre.x(), centre.y(), centre.z());
+    }
+    for (const geometry::Hole& h : model.holes)
+      std::printf("hole %s r %.3f at (%.3f %.3f %.3f)\n", geometry::to_string(h.source), h.radius, h.centre.x(), h.centre.y(), h.centre.z());
+  }
 
   // Through holes: a hole of the plan on the same axis line (within 0.2 mm) with the radius within 2 %.
   for (const geometry::TrueHole& truth : part.holes) {

@@ -1,0 +1,102 @@
+// A hole seen from its wall: the plate's Ø12 bore with its wall cut off at a depth that varies round it
+// (as a scan that looked part way down leaves it) is found from that border loop, with the wall's
+// circle, axis, entry and seen depth; a rim loop lying in the top face (no wall) is not a wall's.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "geometry/analytic_parts.hpp"
+#include "geometry/boundary_loops.hpp"
+#include "geometry/feature_model.hpp"
+#include "geometry/wall_hole.hpp"
+
+namespace cmm::geometry {
+namespace {
+
+const Vec3 kCentre(70, 25, 0);  // the plate's Ø12 hole at (70, 25), 10 mm deep
+constexpr double kRadius = 6;
+
+// The seen depth below the top at angle θ round the hole: 3 to 7 mm.
+double seen_depth(const Vec3& p) { return 5 + 2 * std::sin(std::atan2(p.y() - kCentre.y(), p.x() - kCentre.x())); }
+
+// The plate without its underside and with the Ø12 wall below the seen depth; `keep_wall` false drops
+// that wall entirely (the scan never saw it). With `notch`, the scan also missed the wall and 1 mm of
+// the top face over 20° of the rim: its crease is no closed curve, only the wall says it is a hole.
+TriangleMesh seen_plate(bool keep_wall, double noise_mm, bool notch = false) {
+  TriangleMesh mesh = make_plate_with_holes(0.4).mesh;
+  if (noise_mm > 0) mesh = with_gaussian_noise(mesh, noise_mm, 20261206);
+  const FaceGeometry faces = face_geometry(mesh);
+  Triangles kept(mesh.faces.rows(), 3);
+  Eigen::Index count = 0;
+  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
+    const Vec3 c = face_centroid(mesh, static_cast<int>(f));
+    const double from_axis = std::hypot(c.x() - kCentre.x(), c.y() - kCentre.y());
+    const bool underside = c.z() < 0.3 && faces.normals(f, 2) < -0.7;
+    const bool this_wall = std::abs(from_axis - kRadius) < 0.3 && std::abs(faces.normals(f, 2)) < 0.7;
+    const bool notched = notch && std::abs(std::atan2(c.y() - kCentre.y(), c.x() - kCentre.x())) < 10 * std::numbers::pi / 180 &&
+                         (this_wall || (faces.normals(f, 2) > 0.7 && from_axis < kRadius + 1));
+    if (underside || notched || (this_wall && (!keep_wall || c.z() < 10 - seen_depth(c)))) continue;
+    kept.row(count++) = mesh.faces.row(f);
+  }
+  kept.conservativeResize(count, 3);
+  mesh.faces = kept;
+  return mesh;
+}
+
+// The hole loop nearest the Ø12 hole's axis.
+BoundaryLoop loop_round_the_hole(const TriangleMesh& mesh) {
+  const EdgeAdjacency adjacency = edge_adjacency(mesh);
+  BoundaryLoop best;
+  double nearest = 1e300;
+  for (const BoundaryLoop& loop : boundary_loops(mesh, adjacency)) {
+    Vec3 centre = Vec3::Zero();
+    for (int v : loop.vertices) centre += vertex(mesh, v) / static_cast<double>(loop.vertices.size());
+    const double off = std::hypot(centre.x() - kCentre.x(), centre.y() - kCentre.y());
+    if (off < nearest) nearest = off, best = loop;
+  }
+  return best;
+}
+
+TEST(WallHole, APartlySeenWallGivesItsCircleAxisEntryAndSeenDepth) {
+  for (const double noise : {0.0, 0.02}) {
+    const TriangleMesh mesh = seen_plate(true, noise);
+    const BoundaryLoop loop = loop_round_the_hole(mesh);
+    const auto hole = wall_hole(mesh, edge_adjacency(mesh), face_geometry(mesh), loop, 0.05);
+    ASSERT_TRUE(hole) << "noise " << noise;
+    EXPECT_GT(hole->axis.z(), 0.999) << "out of the material at the entry";
+    EXPECT_NEAR(hole->radius, kRadius, 0.01 * kRadius) << "noise " << noise;
+    EXPECT_LT(std::hypot(hole->entry_centre.x() - kCentre.x(), hole->entry_centre.y() - kCentre.y()), 0.05) << "noise " << noise;
+    EXPECT_NEAR(hole->entry_centre.z(), 10, 0.4) << "noise " << noise;
+    EXPECT_NEAR(hole->seen_depth_mm, 7, 0.5) << "noise " << noise;
+  }
+}
+
+TEST(WallHole, ARimLoopInTheTopFaceIsNoWalls) {
+  const TriangleMesh mesh = seen_plate(false, 0);
+  const BoundaryLoop loop = loop_round_the_hole(mesh);
+  EXPECT_FALSE(wall_hole(mesh, edge_adjacency(mesh), face_geometry(mesh), loop, 0.05));
+}
+
+// Through the feature model: the noisy plate's hole, its rim crease broken by the notch, is a bore with
+// its rim points on the entry circle, and one hole only.
+TEST(WallHole, TheFeatureModelMeasuresItAsABore) {
+  const FeatureModel model = extract_features(seen_plate(true, 0.02, true), {});
+  int found = 0;
+  for (const Hole& hole : model.holes) {
+    if (std::hypot(hole.centre.x() - kCentre.x(), hole.centre.y() - kCentre.y()) > 0.2) continue;
+    ++found;
+    EXPECT_EQ(hole.source, HoleSource::bore);
+    EXPECT_NEAR(hole.radius, kRadius, 0.02 * kRadius);
+    EXPECT_GE(hole.rim_point_ids.size(), 10u);
+    for (int id : hole.rim_point_ids) {
+      const Vec3 p = model.points[static_cast<std::size_t>(id)].position;
+      EXPECT_NEAR(std::hypot(p.x() - kCentre.x(), p.y() - kCentre.y()), kRadius, 0.4);
+      EXPECT_NEAR(p.z(), 10, 0.4);
+    }
+  }
+  EXPECT_EQ(found, 1);
+}
+
+}  // namespace
+}  // namespace cmm::geometry
