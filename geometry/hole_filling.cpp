@@ -34,6 +34,10 @@ constexpr double kMinPatchAngle = 10 * std::numbers::pi / 180;  // region growin
 constexpr std::size_t kMaxLeastFoldingLoop = 300;  // O(n³): about 0.1 s at this size
 constexpr double kMaxPatchFold = 160 * std::numbers::pi / 180;  // folding onto itself: an outline's patch
 constexpr double kMinPatchFacing = 0.3;  // mean cosine between the patch's normal and its rim facets'
+constexpr double kMaxStripWidthBins = 3;  // a loop longer than a short one's limit is a strip up to this wide
+constexpr double kStripApartBins = 6;     // measured to vertices at least this far along the loop
+constexpr std::size_t kMaxStripPiece = 150;
+constexpr double kMaxRungBins = 4;
 
 std::uint64_t directed_key(int from, int to) { return (std::uint64_t(std::uint32_t(from)) << 32) | std::uint32_t(to); }
 
@@ -111,7 +115,14 @@ class Filler {
       for (const std::vector<int>& cycle : simple_cycles(loop)) {
         double perimeter = 0;
         for (std::size_t i = 0; i < cycle.size(); ++i) perimeter += (at(cycle[(i + 1) % cycle.size()]) - at(cycle[i])).norm();
-        if (perimeter > options_.max_perimeter_bins * bin_) continue;
+        if (perimeter > options_.max_perimeter_bins * bin_) {
+          // A long loop is no patch to guess, unless it is a thin strip (along a crease the growth did
+          // not join): then every piece of it is as well known as a short loop.
+          if (!thin_strip(cycle)) { say(cycle, perimeter, "long, not a thin strip", 0); continue; }
+          ++out.loops_examined;
+          if (fill_strip(cycle, perimeter)) ++out.loops_filled;
+          continue;
+        }
         ++out.loops_examined;
         if (fill(cycle, perimeter)) ++out.loops_filled;
       }
@@ -509,6 +520,106 @@ class Filler {
       return false;
     }
     return commit(faces, points, cycle, perimeter, "filled least folding");
+  }
+
+  // A strip no wider than kMaxStripWidthBins·B: most of its vertices have a vertex of the other run that
+  // close, one farther along the loop than a short loop goes round (on a circle of radius R ≫ B the
+  // nearest vertex that far along is about that far away).
+  bool thin_strip(const std::vector<int>& cycle) const {
+    const std::size_t n = cycle.size();
+    std::vector<double> along(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) along[i + 1] = along[i] + (at(cycle[(i + 1) % n]) - at(cycle[i])).norm();
+    const double perimeter = along[n], apart = kStripApartBins * bin_;
+    std::vector<double> width;
+    for (std::size_t i = 0; i < n; ++i) {
+      double nearest = INFINITY;
+      for (std::size_t j = 0; j < n; ++j) {
+        const double arc = std::abs(along[i] - along[j]);
+        if (std::min(arc, perimeter - arc) > apart) nearest = std::min(nearest, (at(cycle[i]) - at(cycle[j])).norm());
+      }
+      width.push_back(nearest);
+    }
+    std::nth_element(width.begin(), width.begin() + static_cast<std::ptrdiff_t>(n / 2), width.end());
+    return width[n / 2] <= kMaxStripWidthBins * bin_;
+  }
+
+  // A thin strip cut by rungs (diagonals no longer than kMaxRungBins·B between its runs) into pieces of at most
+  // kMaxStripPiece vertices, each given its least-folding patch; a rung borders two pieces and no facet
+  // yet, so it turns nothing in either.
+  bool fill_strip(const std::vector<int>& cycle, double perimeter) {
+    const std::size_t n = cycle.size();
+    std::vector<std::vector<std::size_t>> pending(1), pieces;
+    for (std::size_t i = 0; i < n; ++i) pending[0].push_back(i);
+    while (!pending.empty()) {
+      std::vector<std::size_t> piece = std::move(pending.back());
+      pending.pop_back();
+      if (piece.size() <= kMaxStripPiece) {
+        pieces.push_back(std::move(piece));
+        continue;
+      }
+      const std::size_t m = piece.size();
+      std::size_t best_i = 0, best_j = 0;
+      double best = INFINITY;
+      for (std::size_t i = 0; i < m; i += std::max<std::size_t>(1, m / 16))
+        for (std::size_t step = m / 4; step <= 3 * m / 4; ++step) {
+          const std::size_t j = (i + step) % m;
+          const double d = (at(cycle[piece[i]]) - at(cycle[piece[j]])).norm();
+          if (d < best && !edges_.contains(edge_key(cycle[piece[i]], cycle[piece[j]]))) best = d, best_i = i, best_j = j;
+        }
+      if (!(best <= kMaxRungBins * bin_)) {
+        say(cycle, perimeter, "strip without a short rung", best);
+        return false;
+      }
+      std::vector<std::size_t> first, second;
+      for (std::size_t k = best_i;; k = (k + 1) % m) {
+        first.push_back(piece[k]);
+        if (k == best_j) break;
+      }
+      for (std::size_t k = best_j;; k = (k + 1) % m) {
+        second.push_back(piece[k]);
+        if (k == best_i) break;
+      }
+      pending.push_back(std::move(first));
+      pending.push_back(std::move(second));
+    }
+    std::vector<Face> faces;
+    for (const std::vector<std::size_t>& piece : pieces) {
+      const std::size_t m = piece.size();
+      std::vector<Vec3> x, rim;
+      for (std::size_t k = 0; k < m; ++k) {
+        x.push_back(at(cycle[piece[k]]));
+        const bool side = piece[(k + 1) % m] == (piece[k] + 1) % n;
+        const auto found = side ? rim_normals_.find(directed_key(cycle[piece[k]], cycle[piece[(k + 1) % m]])) : rim_normals_.end();
+        rim.push_back(found == rim_normals_.end() ? Vec3::Zero() : found->second);
+      }
+      const auto patch = least_folding_patch(x, rim, [&](int a, int b) {
+        return !edges_.contains(edge_key(cycle[piece[static_cast<std::size_t>(a)]], cycle[piece[static_cast<std::size_t>(b)]]));
+      });
+      if (!patch || patch->max_dihedral_rad > kMaxPatchFold) {
+        say(cycle, perimeter, "strip piece folds (deg)", patch ? patch->max_dihedral_rad * 180 / std::numbers::pi : 999);
+        return false;
+      }
+      Vec3 normal = Vec3::Zero();
+      for (const auto& t : patch->triangles) {
+        const Vec3& a = x[static_cast<std::size_t>(t[0])];
+        normal += (x[static_cast<std::size_t>(t[1])] - a).cross(x[static_cast<std::size_t>(t[2])] - a);
+        faces.push_back({cycle[piece[static_cast<std::size_t>(t[0])]], cycle[piece[static_cast<std::size_t>(t[1])]],
+                         cycle[piece[static_cast<std::size_t>(t[2])]]});
+      }
+      double facing = 0, sides = 0;
+      for (const Vec3& r : rim)
+        if (!r.isZero()) facing += r.dot(normal.normalized()), ++sides;
+      if (!(sides > 0) || facing / sides < kMinPatchFacing) {
+        say(cycle, perimeter, "strip piece faces away", facing / std::max(sides, 1.0));
+        return false;
+      }
+    }
+    std::vector<Vec3> points;
+    if (!refine(cycle, faces, points, [](const Vec3& p) { return p; })) {
+      say(cycle, perimeter, "strip patch too big", static_cast<double>(faces.size()));
+      return false;
+    }
+    return commit(faces, points, cycle, perimeter, "filled as a strip");
   }
 
   // Where the two faces' runs cannot be clipped apart (a loop that wiggles across the crease, sides

@@ -13,17 +13,22 @@ namespace {
 struct Weight {
   double angle = 0;  // the largest dihedral inside the sub-patch and against its rim
   double area = 0;
+  double longest = 0;  // the longest diagonal
   bool feasible = false;
 };
 
+// Lexicographic, each within rounding: a flat loop's triangulations all fold 0° and cover one area, and
+// then the one with the shortest longest diagonal is the one a refinement needs least to cut.
 bool better(const Weight& a, const Weight& b) {
   if (!b.feasible) return a.feasible;
   if (!a.feasible) return false;
-  if (std::abs(a.angle - b.angle) > 1e-12) return a.angle < b.angle;
-  return a.area < b.area;
+  if (std::abs(a.angle - b.angle) > 1e-9) return a.angle < b.angle;
+  if (std::abs(a.area - b.area) > 1e-9 * std::max(a.area, b.area)) return a.area < b.area;
+  return a.longest < b.longest;
 }
 
-double angle_between(const Vec3& a, const Vec3& b) { return std::acos(std::clamp(a.dot(b), -1.0, 1.0)); }
+// A zero normal is a side no facet lies beside yet: it turns nothing.
+double angle_between(const Vec3& a, const Vec3& b) { return b.isZero() ? 0.0 : std::acos(std::clamp(a.dot(b), -1.0, 1.0)); }
 
 }  // namespace
 
@@ -35,7 +40,7 @@ std::optional<LeastFoldingPatch> least_folding_patch(const std::vector<Vec3>& lo
   std::vector<Weight> best(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
   std::vector<int> apex(best.size(), -1);
   std::vector<Vec3> normal(best.size(), Vec3::Zero());  // of the triangle (i, apex, j)
-  for (int i = 0; i + 1 < n; ++i) best[at(i, i + 1)] = Weight{0, 0, true};
+  for (int i = 0; i + 1 < n; ++i) best[at(i, i + 1)] = Weight{0, 0, 0, true};
   // The facet beside the diagonal or side (i, j) of the sub-polygon i..j, from inside it.
   const auto beside = [&](int i, int j) { return j == i + 1 ? rim_normals[static_cast<std::size_t>(i)] : normal[at(i, j)]; };
   for (int length = 2; length < n; ++length)
@@ -53,8 +58,9 @@ std::optional<LeastFoldingPatch> least_folding_patch(const std::vector<Vec3>& lo
         const double twice_area = cross.norm();
         if (!(twice_area > 0)) continue;
         const Vec3 n_t = cross / twice_area;
+        const double diagonal = i == 0 && j == n - 1 ? 0.0 : (loop[static_cast<std::size_t>(j)] - loop[static_cast<std::size_t>(i)]).norm();
         Weight candidate{std::max({left.angle, right.angle, angle_between(n_t, beside(i, k)), angle_between(n_t, beside(k, j))}),
-                         left.area + right.area + 0.5 * twice_area, true};
+                         left.area + right.area + 0.5 * twice_area, std::max({left.longest, right.longest, diagonal}), true};
         if (i == 0 && j == n - 1)
           candidate.angle = std::max(candidate.angle, angle_between(n_t, rim_normals[static_cast<std::size_t>(n - 1)]));
         if (better(candidate, w)) {
