@@ -118,7 +118,10 @@ class Filler {
         if (perimeter > options_.max_perimeter_bins * bin_) {
           // A long loop is no patch to guess, unless it is a thin strip (along a crease the growth did
           // not join): then every piece of it is as well known as a short loop.
-          if (!thin_strip(cycle)) { say(cycle, perimeter, "long, not a thin strip", 0); continue; }
+          if (!thin_strip(cycle)) {
+            say(cycle, perimeter, "long, not a thin strip", 0);
+            continue;
+          }
           ++out.loops_examined;
           if (fill_strip(cycle, perimeter)) ++out.loops_filled;
           continue;

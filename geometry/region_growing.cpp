@@ -20,6 +20,8 @@
 namespace cmm::geometry {
 namespace {
 
+constexpr int kMinComponentFaces = 24;  // fewer is a speck beside the surface, not a piece of it
+
 double deg(double d) { return d * std::numbers::pi / 180; }
 Vec3 row(const Points& p, Eigen::Index i) { return p.row(i).transpose(); }
 
@@ -189,6 +191,26 @@ std::vector<Vec3> seed_normals(const Vertices& v, const Points& raw_normals, con
   return out;
 }
 
+// A component of a few facets beside the surface (a view's sparse edge, a cluster of strays the outlier
+// removal kept) is no part of it: its outline would be one more loop, and its raw points still back the
+// patch that closes the gap it sat in. Its vertices are left unused.
+void drop_specks(TriangleMesh& mesh) {
+  if (mesh.faces.rows() == 0) return;
+  const EdgeAdjacency adjacency = edge_adjacency(mesh);
+  int count = 0;
+  const std::vector<int> component = face_components(mesh, adjacency, &count);
+  if (count < 2) return;
+  std::vector<int> size(static_cast<std::size_t>(count), 0);
+  for (int c : component) ++size[static_cast<std::size_t>(c)];
+  Triangles kept(mesh.faces.rows(), 3);
+  Eigen::Index rows = 0;
+  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
+    if (size[static_cast<std::size_t>(component[static_cast<std::size_t>(f)])] >= kMinComponentFaces) kept.row(rows++) = mesh.faces.row(f);
+  if (rows == 0) return;  // all specks: a tiny scan, keep what there is
+  kept.conservativeResize(rows, 3);
+  mesh.faces = std::move(kept);
+}
+
 // Each edge-connected component is turned as a whole: by the majority of its points' scanner
 // normals, else outward from the centroid (a closed part: positive volume), else up.
 void orient_components(TriangleMesh& mesh, const Vertices& v, const Points& raw_normals, const Points& raw) {
@@ -291,6 +313,7 @@ Triangulation triangulate_scan(const Points& thinned, const Points& raw, const s
   out.mesh.faces.resize(grown.faces.rows(), 3);
   for (Eigen::Index f = 0; f < grown.faces.rows(); ++f)
     for (int k = 0; k < 3; ++k) out.mesh.faces(f, k) = index[grown.faces(f, k)];
+  drop_specks(out.mesh);
   // Gaps the front left where the noise kept every candidate from agreeing: raw points lie across them.
   if (raw.rows() > 0 && raw_index.size() == static_cast<std::size_t>(raw.rows())) {
     HoleFillingOptions filling;

@@ -276,3 +276,29 @@ TEST(ScanFrontEnd, SameMeshOnOneAndTwoThreads) {
 
 }  // namespace
 }  // namespace cmm::geometry
+
+namespace cmm::geometry {
+namespace {
+
+// A speck beside the surface (a dense 1.2 mm cluster 3 mm above a plane, too many points for the outlier
+// removal to take) meshes into a few facets: it is dropped, not kept as a component with a loop of its own.
+TEST(ScanFrontEnd, ASpeckBesideTheSurfaceIsNoComponentOfIt) {
+  std::vector<Vec3> points;
+  for (double x = 0; x <= 15; x += 0.1)
+    for (double y = 0; y <= 15; y += 0.1) points.emplace_back(x, y, 0);
+  for (double x = 0; x <= 1.2; x += 0.05)
+    for (double y = 0; y <= 1.2; y += 0.05) points.emplace_back(5 + x, 5 + y, 3);
+  PointCloud cloud;
+  cloud.points.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i) cloud.points.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  ScanOptions options;
+  options.tolerance_mm = 0.05;
+  const ScanMesh m = mesh_scan(cloud, "plane with a speck", options);
+  EXPECT_EQ(m.report.components, 1u);
+  EXPECT_EQ(m.report.outer_loops + m.report.hole_loops, 1u);
+  for (Eigen::Index f = 0; f < m.mesh.faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(m.mesh.vertices(m.mesh.faces(f, k), 2)), 1e-6) << "facet " << f;
+}
+
+}  // namespace
+}  // namespace cmm::geometry
