@@ -36,6 +36,7 @@
 #include "geometry/outlier_removal.hpp"
 #include "geometry/point_cloud.hpp"
 #include "geometry/region_growing.hpp"
+#include "geometry/scan_noise.hpp"
 #include "geometry/scan_front_end.hpp"
 #include "geometry/voxel_thinning.hpp"
 #include "sim/raw_scan.hpp"
@@ -94,6 +95,7 @@ struct Prepared {
   std::unique_ptr<CloudIndex> index;
   std::vector<LocalSurface> fits;
   BinSize bin;
+  double noise_sigma_mm = 0;
   std::vector<int> kept;  // into clean
   Points thinned;
 };
@@ -106,6 +108,7 @@ std::unique_ptr<Prepared> prepare(const PointCloud& raw) {
   }
   p->index = std::make_unique<CloudIndex>(p->clean.points);
   p->fits = fit_local_surfaces(p->clean.points, *p->index, {kNeighbours, {}});
+  p->noise_sigma_mm = estimate_scan_noise(p->fits).sigma_mm;
   BinSizeOptions bin_options;
   bin_options.tolerance_mm = kTolerance;
   p->bin = bin_size_for_tolerance(p->clean.points, p->fits, *p->index, bin_options);
@@ -123,10 +126,11 @@ const Prepared& prepared(long points) {
 }
 
 // As mesh_scan sets them for uniform bins (the dump checks that both give the same mesh).
-RegionGrowingOptions growing_options(double bin_mm) {
+RegionGrowingOptions growing_options(const Prepared& p) {
   RegionGrowingOptions o;
-  o.bin_mm = bin_mm;
+  o.bin_mm = p.bin.bin_mm;
   o.max_edge_bins = kMaxEdgeBins;
+  o.noise_sigma_mm = p.noise_sigma_mm;
   return o;
 }
 
@@ -179,7 +183,7 @@ void bm_triangulate(benchmark::State& state) {
   std::size_t triangles = 0;
   for (auto _ : state) {
     const Triangulation t = triangulate_scan(p.thinned, p.clean.points, p.fits, *p.index, p.clean.normals,
-                                             growing_options(p.bin.bin_mm));
+                                             growing_options(p));
     triangles = static_cast<std::size_t>(t.mesh.faces.rows());
   }
   state.counters["points"] = static_cast<double>(raw_scan(state.range(0)).points.rows());
@@ -242,7 +246,7 @@ int dump(const fs::path& dir) {
     // Our mesh is mesh_scan's; bm_triangulate's call must give the same (same cloud, B, options).
     const ScanMesh ours = mesh_scan(raw, "bench", mesh_scan_options());
     const Triangulation t = triangulate_scan(p.thinned, p.clean.points, p.fits, *p.index, p.clean.normals,
-                                             growing_options(p.bin.bin_mm));
+                                             growing_options(p));
     const bool same = t.mesh.faces == ours.mesh.faces && t.mesh.vertices == ours.mesh.vertices &&
                       ours.report.bin_size_mm == p.bin.bin_mm && ours.report.points_kept == p.kept.size();
     if (!same)
@@ -319,7 +323,7 @@ int run_stage(const std::string& stage, const fs::path& cloud_file) {
     result = thin_with_fits(raw.points).kept;
   } else if (stage == "triangulate") {
     result = static_cast<std::size_t>(triangulate_scan(p->thinned, p->clean.points, p->fits, *p->index, p->clean.normals,
-                                                       growing_options(p->bin.bin_mm))
+                                                       growing_options(*p))
                                           .mesh.faces.rows());
   } else if (stage == "mesh_scan") {
     result = mesh_scan(raw, cloud_file.string(), mesh_scan_options()).report.triangles;
