@@ -37,6 +37,7 @@ constexpr double kMinPatchFacing = 0.3;  // mean cosine between the patch's norm
 constexpr double kMaxStripWidthBins = 3;  // a loop longer than a short one's limit is a strip up to this wide
 constexpr double kStripApartBins = 6;     // measured to vertices at least this far along the loop
 constexpr std::size_t kMaxStripPiece = 150;
+constexpr std::size_t kMaxStripVertices = 4000;  // about 2,000 B long: the plate's whole back edge is 747
 constexpr double kMaxRungBins = 4;
 
 std::uint64_t directed_key(int from, int to) { return (std::uint64_t(std::uint32_t(from)) << 32) | std::uint32_t(to); }
@@ -530,6 +531,7 @@ class Filler {
   // nearest vertex that far along is about that far away).
   bool thin_strip(const std::vector<int>& cycle) const {
     const std::size_t n = cycle.size();
+    if (n > kMaxStripVertices) return false;  // the width is measured in O(n²)
     std::vector<double> along(n + 1, 0);
     for (std::size_t i = 0; i < n; ++i) along[i + 1] = along[i] + (at(cycle[(i + 1) % n]) - at(cycle[i])).norm();
     const double perimeter = along[n], apart = kStripApartBins * bin_;
