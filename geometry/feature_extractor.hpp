@@ -65,7 +65,7 @@ class Extractor {
   std::vector<Vec3> smooth_curve(const std::vector<Vec3>& raw, bool closed, const std::optional<Circle3>& rim,
                                  std::vector<double>& noise_gain) const;
   bool two_distinct_sides(const std::vector<CurveSample>& samples) const;
-  SideNormal side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn, double along);
+  SideNormal side(SideRegionFinder& finder, int seed, int across, const PolylineSample& s, const Vec3& turn, double along);
   double along_edge(const std::vector<Vec3>& points, bool closed, const PolylineSample& s, const std::optional<Circle3>& rim) const;
   // The vertex noise a clean mesh's side normals carry over `region` (its facets' residuals are the
   // tessellation's), and the whole mesh's; none on a noisy mesh, whose residuals are the noise.

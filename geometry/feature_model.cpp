@@ -121,8 +121,8 @@ std::vector<CurveSample> Extractor::sample_curve(SideRegionFinder& finder, const
     if (sample.left_face < 0 || sample.right_face < 0) continue;  // inconsistent orientation here
     const double along = along_edge(points, curve.closed, s, rim);
     const Vec3 turn = edge_turn(points, curve.closed, s, along, rim);
-    sample.left = side(finder, sample.left_face, s, turn, along);
-    sample.right = side(finder, sample.right_face, s, turn, along);
+    sample.left = side(finder, sample.left_face, sample.right_face, s, turn, along);
+    sample.right = side(finder, sample.right_face, sample.left_face, s, turn, along);
     sample.chord = chord_deviation(points, curve.closed, s.segment);
     sample.position_sigma_mm = position_sigma(noise_gain, s.segment);
     result.push_back(sample);
@@ -221,8 +221,9 @@ double Extractor::across_edge(int seed, const PolylineSample& s) const {
 }
 
 // The side normal grown from a seed face; a seed that is a fold of noise (its region stays tiny)
-// hands over to the neighbour whose region is largest.
-SideNormal Extractor::side(SideRegionFinder& finder, int seed, const PolylineSample& s, const Vec3& turn, double along) {
+// hands over to the neighbour whose region is largest: first within its side, then across the fold's
+// far feature edge (a noisy crease's sliver fold lies between two feature curves).
+SideNormal Extractor::side(SideRegionFinder& finder, int seed, int across, const PolylineSample& s, const Vec3& turn, double along) {
   const double radius = across_edge(seed, s);
   std::vector<int> region = finder.region(seed, s.position, s.direction, radius, along);
   if (model_.features.noisy && region.size() < min_region_faces) {
@@ -234,7 +235,26 @@ SideNormal Extractor::side(SideRegionFinder& finder, int seed, const PolylineSam
       if (other.size() > region.size()) region = other;
     }
   }
-  if (model_.features.noisy) return side_normal(mesh_, faces_, region, s.position, s.direction, turn, std::nullopt);
+  // A fold of noise lying along the crease is a sliver between two feature curves: the side beyond it
+  // is across its other feature edge, never across this curve's own (to `across`, the other side's seed).
+  bool beyond_fold = false;
+  if (model_.features.noisy && region.size() < min_region_faces) {
+    for (int k = 0; k < 3; ++k) {
+      const int e = adjacency_.face_edges(seed, k);
+      const int neighbour = adjacency_.other_face(e, seed);
+      if (neighbour < 0 || neighbour == across || !model_.features.is_feature[e]) continue;
+      const std::vector<int>& other = finder.region(neighbour, s.position, s.direction, radius, along);
+      if (other.size() > region.size()) region = other, beyond_fold = true;
+    }
+  }
+  if (model_.features.noisy) {
+    SideNormal out = side_normal(mesh_, faces_, region, s.position, s.direction, turn, std::nullopt);
+    out.beyond_fold = beyond_fold;
+    double area = 0;
+    for (int f : region) out.centroid += faces_.areas[f] * face_centroid(mesh_, f), area += faces_.areas[f];
+    if (area > 0) out.centroid /= area;
+    return out;
+  }
   // On a clean mesh the facets at the edge are best where they are exact; where they are not (a
   // decimated patch), more of the side steadies the fit. The neighbourhood that states the smallest
   // uncertainty is taken (Lepski's rule, which keeps a narrower fit that disagrees with a wider one,
@@ -285,7 +305,11 @@ void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& sam
     const Vec3 cross = up.normal.cross(down.normal);
     p.tangent = cross.norm() > 1e-9 ? Vec3(cross.normalized()) : s.at.direction;
     const double turn = angle_between(up.normal, down.normal);
-    p.interior_angle_rad = convex ? std::numbers::pi - turn : std::numbers::pi + turn;
+    // Beyond a fold the curve's convexity flag is the fold's, not the edge's: at a convex edge each
+    // side's facets lie behind the other side's plane.
+    if (up.beyond_fold || down.beyond_fold)
+      p.convex = (up.centroid - p.position).dot(down.normal) < 0 && (down.centroid - p.position).dot(up.normal) < 0;
+    p.interior_angle_rad = p.convex ? std::numbers::pi - turn : std::numbers::pi + turn;
     p.n_up_uncertainty_rad = up.uncertainty_rad, p.n_down_uncertainty_rad = down.uncertainty_rad;
     p.n_up_spread_rad = up.facet_spread_rad, p.n_down_spread_rad = down.facet_spread_rad;
     p.curve = curve;

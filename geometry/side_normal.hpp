@@ -15,6 +15,11 @@ struct SideNormal {
   double uncertainty_rad = 0;   // standard error of `normal`'s turn about the edge (what moves a window)
   double facet_spread_rad = 0;  // RMS angle of the single facets about the fitted normal field
   int face_count = 0;
+  // Set by the feature extractor: the side was taken beyond a fold of noise along the crease (its seed's
+  // region was a sliver), and where the side's facets lie (area-weighted), which then says the edge's
+  // convexity at this point better than the fold's own feature curve does.
+  bool beyond_fold = false;
+  Vec3 centroid = Vec3::Zero();
 };
 
 // Finds, for one side of an edge, the faces reachable from a seed face without crossing a feature or
