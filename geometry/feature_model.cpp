@@ -289,6 +289,18 @@ std::optional<CleanNoise> Extractor::clean_noise(const std::vector<int>& region)
   return CleanNoise{std::max(sigma, local), sigma};
 }
 
+// A point whose side lies beyond a fold of noise is still on the fold's curve, off the edge by about the
+// fold's width: how far it is from where the two sides' planes (through their facets' centroids) meet,
+// which the point's δ then covers (delta_at). On a curved side the plane through the centroid lies a
+// little inside the surface, so the figure errs large.
+double beyond_fold_offset(const Vec3& point, const SideNormal& up, const SideNormal& down) {
+  if (!up.beyond_fold && !down.beyond_fold) return 0;
+  const double c = up.normal.dot(down.normal), det = 1 - c * c;
+  if (det < 1e-6) return 0;  // one plane: no crease line to be off
+  const double r0 = up.normal.dot(up.centroid - point), r1 = down.normal.dot(down.centroid - point);
+  return ((r0 - c * r1) / det * up.normal + (r1 - c * r0) / det * down.normal).norm();
+}
+
 void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole) {
   const bool convex = model_.features.curves[curve].convex;
   for (const CurveSample& s : samples) {
@@ -314,7 +326,7 @@ void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& sam
     p.n_up_spread_rad = up.facet_spread_rad, p.n_down_spread_rad = down.facet_spread_rad;
     p.curve = curve;
     p.hole = hole;
-    p.mesh_deviation_mm = s.chord.sagitta_mm;
+    p.mesh_deviation_mm = s.chord.sagitta_mm + beyond_fold_offset(p.position, up, down);
     p.position_sigma_mm = s.position_sigma_mm;
     // A facet of a fan is exact at its middle: at most half a chord's turn along the edge from the point,
     // which tilts its normal in the cross-section by up to (θ/2)²/2. A window's margin takes that off.
