@@ -158,6 +158,8 @@ JobSink JobManager::sink_for(Job& job) {
     // free before anyone hears so, and a machine.home sent on that word is not refused as busy.
     if (!is_running(state)) lease_.reset();
     std::lock_guard lock(mutex_);
+    // Cancelled before its run began: whatever the run says after is not the job's state.
+    if (is_final(job.record.state)) return;
     // A cancel that came after the run decided to hold and before it said so is not lost to the pause
     // (ending_of keeps one that came before).
     if (state == JobState::paused && job.control.cancel) set_state(job, JobState::cancelled, "cancelled by the operator", std::nullopt);
@@ -307,6 +309,10 @@ nlohmann::json JobManager::cancel(int id) {
       spdlog::warn("job {}: stopping the machine to cancel: {}", id, e.what());
     }
   } else {
+    // The worker may hold the job already (taken from the queue, not yet planning; or a resumed one
+    // not yet running): its run hears the cancel before any motion, and what it reports after this
+    // final state is not recorded (sink_for).
+    if (running_ == id) job.control.cancel = true;
     set_state(job, JobState::cancelled, "cancelled by the operator", std::nullopt);
     wake_.notify_all();
   }
