@@ -124,10 +124,11 @@ struct Analysis {
   const Points& raw;
   const std::vector<LocalSurface>& fits;
   const CloudIndex& index;
-  double bin, cos_crease, plane_floor, plane_tolerance;
+  double bin, cos_crease, half_crease_angle, plane_floor, plane_tolerance;
 
   // Splits the regular neighbours into `sides` groups of distinct normals; empty when they do not split.
-  std::vector<std::vector<int>> split(const std::vector<int>& members, const std::vector<Vec3>& normals, int sides) const {
+  std::vector<std::vector<int>> split(const std::vector<int>& members, const std::vector<Vec3>& normals, int sides,
+                                      std::size_t share) const {
     std::vector<Vec3> seeds{normals.front()};
     while (static_cast<int>(seeds.size()) < sides) {
       const auto [far, c] = farthest_normal(normals, seeds);
@@ -138,12 +139,50 @@ struct Analysis {
     for (std::size_t i = 0; i < seeds.size(); ++i)
       for (std::size_t j = i + 1; j < seeds.size(); ++j)
         if (std::abs(seeds[i].dot(seeds[j])) > cos_crease) return {};
+    if (share > 10 && (!separate(normals, group, seeds) || !flat(normals, group, seeds))) return {};
     std::vector<std::vector<int>> groups(seeds.size());
     for (std::size_t i = 0; i < members.size(); ++i) groups[group[i]].push_back(members[i]);
-    const std::size_t min_size = std::max<std::size_t>(6, members.size() / 10);
+    const std::size_t min_size = std::max<std::size_t>(6, members.size() / share);
     for (const auto& g : groups)
       if (g.size() < min_size) return {};
     return groups;
+  }
+
+  // Faces that meet at a crease leave a gap between their normals; a face curving through a wide
+  // neighbourhood (a bore's wall) fills it, and splitting it into planes puts a crease on the wall. So of
+  // any two groups at most a tenth of their normals may lie nearer than half the crease angle to the
+  // bisector between them.
+  bool separate(const std::vector<Vec3>& normals, const std::vector<int>& group, const std::vector<Vec3>& seeds) const {
+    const std::size_t n = seeds.size();
+    std::vector<std::size_t> size(n, 0), between(n * n, 0);
+    for (std::size_t i = 0; i < normals.size(); ++i) {
+      const std::size_t g = static_cast<std::size_t>(group[i]);
+      ++size[g];
+      const double own = std::acos(std::min(1.0, std::abs(normals[i].dot(seeds[g]))));
+      for (std::size_t k = 0; k < n; ++k)
+        if (k != g && std::acos(std::min(1.0, std::abs(normals[i].dot(seeds[k])))) - own < half_crease_angle)
+          ++between[std::min(g, k) * n + std::max(g, k)];
+    }
+    for (std::size_t g = 0; g < n; ++g)
+      for (std::size_t k = g + 1; k < n; ++k)
+        if (10 * between[g * n + k] > size[g] + size[k]) return false;
+    return true;
+  }
+
+  // Over a wide neighbourhood a bore's wall turns: its normals spread about its group's, where a flat
+  // face's scatter by the noise only (a few degrees). 90 % of each group within a third of the crease
+  // angle of its seed, or it is no plane.
+  bool flat(const std::vector<Vec3>& normals, const std::vector<int>& group, const std::vector<Vec3>& seeds) const {
+    std::vector<std::size_t> size(seeds.size(), 0), wide(seeds.size(), 0);
+    const double limit = std::cos(2 * half_crease_angle / 3);
+    for (std::size_t i = 0; i < normals.size(); ++i) {
+      const std::size_t g = static_cast<std::size_t>(group[i]);
+      ++size[g];
+      wide[g] += std::abs(normals[i].dot(seeds[g])) < limit;
+    }
+    for (std::size_t g = 0; g < seeds.size(); ++g)
+      if (10 * wide[g] > size[g]) return false;
+    return true;
   }
 
   // The group's points lie on one side of the crease line, as a face ends at its crease.
@@ -158,7 +197,8 @@ struct Analysis {
     return std::min(positive, negative) <= (positive + negative) / 10;
   }
 
-  LocalCrease crease(const Vec3& x0, const std::vector<std::vector<int>>& groups) const {
+  // The line found is at most `reach` from the irregular point that looked for it.
+  LocalCrease crease(const Vec3& x0, const std::vector<std::vector<int>>& groups, double reach) const {
     Plane p[2];
     for (int k = 0; k < 2; ++k) {
       p[k] = robust_plane(raw, groups[k], plane_floor);
@@ -172,7 +212,7 @@ struct Analysis {
     const double alpha = (r0 - c * r1) / det, beta = (r1 - c * r0) / det;
     LocalCrease out;
     out.position = x0 + alpha * p[0].normal + beta * p[1].normal;
-    if ((out.position - x0).norm() > 1.5 * bin) return {};
+    if ((out.position - x0).norm() > reach) return {};
     out.direction = p[0].normal.cross(p[1].normal).normalized();
     for (int k = 0; k < 2; ++k)
       if (!one_sided(groups[k], p[k].normal, out.position, out.direction)) return {};
@@ -240,12 +280,19 @@ struct Analysis {
     LocalCrease c;
     for (double reach : {2.0, 3.0}) {
       c = look(x0, reach * bin);
-      if (c.sides != 0) break;
+      if (c.sides != 0) return c;
     }
-    return c;
+    // A face scanned far more sparsely than its neighbour (seen by one view of five at a grazing angle)
+    // has fits wider than 3 B, irregular out to their own radius: look as far as they reach, where that
+    // face holds fewer of the regular points (on the plate's back face in partial views, 5–7 %).
+    double widest = 0;
+    for (int j : index.within(x0, 3 * bin)) widest = std::max(widest, fits[j].radius_mm);
+    const double reach = std::min(1.5 * widest, 6 * bin);
+    return reach > 3 * bin ? look(x0, reach, 20) : c;
   }
 
-  LocalCrease look(const Vec3& x0, double radius) const {
+  // `share`: each face holds at least 1/share of the regular points there.
+  LocalCrease look(const Vec3& x0, double radius, std::size_t share = 10) const {
     std::vector<int> members;
     std::vector<Vec3> normals;
     for (int j : index.within(x0, radius)) {
@@ -254,13 +301,14 @@ struct Analysis {
       normals.push_back(fits[j].normal);
     }
     if (members.size() < 12) return {};
-    const auto three = split(members, normals, 3);
+    const auto three = split(members, normals, 3, share);
     if (!three.empty()) {
       const LocalCrease c = corner(x0, three);
       if (c.sides == 3) return c;
     }
-    const auto two = split(members, normals, 2);
-    return two.empty() ? LocalCrease{} : crease(x0, two);
+    const auto two = split(members, normals, 2, share);
+    // The irregular points beside a crease reach out about as far as the fits do, half the look's radius.
+    return two.empty() ? LocalCrease{} : crease(x0, two, std::max(1.5 * bin, radius / 2));
   }
 };
 
@@ -596,7 +644,7 @@ Creases find_creases(const Points& raw, const std::vector<LocalSurface>& fits, c
   const double bin = options.bin_mm;
   if (raw.rows() < 12 || static_cast<Eigen::Index>(fits.size()) != raw.rows() || !(bin > 0)) return out;
   const double sigma = scan_noise(fits);
-  const Analysis analysis{raw, fits, index, bin, cos_deg(options.crease_angle_deg),
+  const Analysis analysis{raw, fits, index, bin, cos_deg(options.crease_angle_deg), options.crease_angle_deg * std::numbers::pi / 360,
                           std::max(3 * sigma, 1e-9 * bin), std::max(4 * sigma, 0.1 * bin)};
 
   const std::vector<int> seeds = candidates(raw, fits, bin);
