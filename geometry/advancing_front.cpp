@@ -117,6 +117,18 @@ class Grower {
     return s.count == 0;
   }
 
+  // More of the facet's corners face against it than with it, by the scanner's normals.
+  bool inside_out(int a, int q, int b, const Vec3& n) const {
+    if (!options_.seed_normals_oriented) return false;
+    int against = 0, along = 0;
+    for (const int v : {a, q, b}) {
+      const double d = seed_normals_[v].dot(n);  // zero where the vertex has no seed normal (a crease point)
+      if (d < -0.5) ++against;
+      if (d > 0.5) ++along;
+    }
+    return against > along;
+  }
+
   // Two points of one crease are joined along it only by its own edges: a chord would skip a crease point.
   bool skips_crease(int u, int w) const {
     const int cu = surfaces_[u].crease, cw = surfaces_[w].crease;
@@ -251,6 +263,7 @@ class Grower {
     }
     // A sliver's normal says little: closing a gap it need only not fold back.
     if (!closes_gap && (!agrees(a, j.normal) || !agrees(b, j.normal) || !agrees(q, j.normal))) return {};
+    if (!closes_gap && inside_out(a, q, b, j.normal)) return {};
 
     // Topology: each directed edge once; a twin consumed only where it closes a gap (§4.3 c).
     if (half(a, q) != -2 || half(q, b) != -2) return {};

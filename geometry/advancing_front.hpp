@@ -39,6 +39,9 @@ struct FrontOptions {
   // than the smaller of its ends'. Empty: max_edge_bins·bin_mm for all.
   std::vector<double> reach_mm;
   CancelCheck cancel;
+  // The seed normals came from a scanner and agree with each other: a facet that faces against those
+  // of its corners is grown inside out (a fold through a small bore's mouth) and is refused.
+  bool seed_normals_oriented = false;
 };
 
 struct FrontResult {

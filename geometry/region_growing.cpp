@@ -191,6 +191,29 @@ std::vector<Vec3> seed_normals(const Vertices& v, const Points& raw_normals, con
   return out;
 }
 
+// Whether the scanner's normals can orient each facet: neighbouring vertices on one face have normals
+// that agree in sign (≥ 95 %). A cloud from a tool that fitted its normals without orienting them has
+// about half of them flipped, and then only whole components are oriented.
+bool normals_orient_facets(const Vertices& v, const std::vector<Vec3>& seeds, bool scanner, double bin) {
+  if (!scanner) return false;
+  const PointGrid grid(v.x, 2 * bin);
+  std::size_t pairs = 0, agree = 0;
+  for (Eigen::Index i = 0; i < v.x.rows(); ++i) {
+    const Vec3& n = seeds[static_cast<std::size_t>(i)];
+    if (n.squaredNorm() == 0) continue;
+    int nearest = -1;
+    double best = 1e300;
+    grid.for_each_within(row(v.x, i), 2 * bin, [&](int j, double d2) {
+      const Vec3& m = seeds[static_cast<std::size_t>(j)];
+      if (j != i && d2 < best && std::abs(m.dot(n)) > 0.9) best = d2, nearest = j;
+    });
+    if (nearest < 0) continue;
+    ++pairs;
+    agree += seeds[static_cast<std::size_t>(nearest)].dot(n) > 0;
+  }
+  return pairs > 0 && 20 * agree >= 19 * pairs;
+}
+
 // A component of a few facets beside the surface (a view's sparse edge, a cluster of strays the outlier
 // removal kept) is no part of it: its outline would be one more loop, and its raw points still back the
 // patch that closes the gap it sat in. Its vertices are left unused.
@@ -295,7 +318,9 @@ Triangulation triangulate_scan(const Points& thinned, const Points& raw, const s
     front.reach_mm.assign(static_cast<std::size_t>(v.x.rows()), options.max_edge_bins * bin);
     for (std::size_t i = 0; i < kept.size(); ++i) front.reach_mm[i] = options.reach_mm[static_cast<std::size_t>(kept[i])];
   }
-  const FrontResult grown = grow_front(v.x, v.surfaces, seed_normals(v, raw_normals, raw), can_seed, crease_edges, front);
+  const std::vector<Vec3> seeds = seed_normals(v, raw_normals, raw);
+  front.seed_normals_oriented = normals_orient_facets(v, seeds, raw_normals.rows() == raw.rows() && raw.rows() > 0, bin);
+  const FrontResult grown = grow_front(v.x, v.surfaces, seeds, can_seed, crease_edges, front);
 
   // Compact: only the vertices the facets use, thinned points first.
   std::vector<int> index(static_cast<std::size_t>(v.x.rows()), -1);
