@@ -289,6 +289,8 @@ std::optional<CleanNoise> Extractor::clean_noise(const std::vector<int>& region)
   return CleanNoise{std::max(sigma, local), sigma};
 }
 
+namespace {
+
 // A point whose side lies beyond a fold of noise is still on the fold's curve, off the edge by about the
 // fold's width: how far it is from where the two sides' planes (through their facets' centroids) meet,
 // which the point's δ then covers (delta_at). On a curved side the plane through the centroid lies a
@@ -300,6 +302,8 @@ double beyond_fold_offset(const Vec3& point, const SideNormal& up, const SideNor
   const double r0 = up.normal.dot(up.centroid - point), r1 = down.normal.dot(down.centroid - point);
   return ((r0 - c * r1) / det * up.normal + (r1 - c * r0) / det * down.normal).norm();
 }
+
+}  // namespace
 
 void Extractor::emit_curve_points(int curve, const std::vector<CurveSample>& samples, int hole) {
   const bool convex = model_.features.curves[curve].convex;
