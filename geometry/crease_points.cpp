@@ -284,11 +284,12 @@ struct Analysis {
     }
     // A face scanned far more sparsely than its neighbour (seen by one view of five at a grazing angle)
     // has fits wider than 3 B, irregular out to their own radius: look as far as they reach, where that
-    // face holds fewer of the regular points (on the plate's back face in partial views, 5–7 %).
+    // face holds fewer of the regular points (on the plate's back face in partial views 3–7 %; a face may
+    // hold as few as 2.5 % here).
     double widest = 0;
     for (int j : index.within(x0, 3 * bin)) widest = std::max(widest, fits[j].radius_mm);
     const double reach = std::min(1.5 * widest, 6 * bin);
-    return reach > 3 * bin ? look(x0, reach, 20) : c;
+    return reach > 3 * bin ? look(x0, reach, 40) : c;
   }
 
   // `share`: each face holds at least 1/share of the regular points there.
