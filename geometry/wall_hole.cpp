@@ -187,6 +187,27 @@ std::optional<WallHole> round_axis(const TriangleMesh& mesh, const EdgeAdjacency
   return hole;
 }
 
+// The normal most of the facets beside the loop share: the face the hole opens in, where the loop runs
+// along the rim on one side and deep down a wall seen on the other (the wall's normals fan out round the
+// axis, the face's agree). A wall seen deeper than the hole is wide hides the axis from the loop's spread
+// and from the normals' scatter alike.
+Vec3 entry_normal(const FaceGeometry& faces, const BoundaryLoop& loop) {
+  std::vector<Vec3> normals;
+  for (int h : loop.half_edges) normals.push_back(faces.normals.row(EdgeAdjacency::face_of(h)).transpose());
+  const double close = std::cos(15 * std::numbers::pi / 180);
+  std::size_t best = 0, best_count = 0;
+  const std::size_t stride = std::max<std::size_t>(1, normals.size() / 256);  // a long outer loop stays linear
+  for (std::size_t i = 0; i < normals.size(); i += stride) {
+    const auto count = static_cast<std::size_t>(
+        std::count_if(normals.begin(), normals.end(), [&](const Vec3& n) { return n.dot(normals[i]) > close; }));
+    if (count > best_count) best = i, best_count = count;
+  }
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& n : normals)
+    if (n.dot(normals[best]) > close) mean += n;
+  return mean.normalized();
+}
+
 }  // namespace
 
 std::optional<WallHole> wall_hole(const TriangleMesh& mesh, const EdgeAdjacency& adjacency, const FaceGeometry& faces,
@@ -208,7 +229,7 @@ std::optional<WallHole> wall_hole(const TriangleMesh& mesh, const EdgeAdjacency&
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> by_spread(spread), by_normals(normals);
   for (const Vec3& first_axis : {Vec3(by_spread.eigenvectors().col(0)), Vec3(by_normals.eigenvectors().col(0)),
-                                 Vec3(by_normals.eigenvectors().col(2))})
+                                 Vec3(by_normals.eigenvectors().col(2)), entry_normal(faces, loop)})
     if (auto hole = round_axis(mesh, adjacency, faces, loop, points, first_axis, circle_tolerance)) return hole;
   return std::nullopt;
 }

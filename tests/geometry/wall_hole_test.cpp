@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "geometry/analytic_parts.hpp"
 #include "geometry/boundary_loops.hpp"
@@ -20,28 +21,33 @@ constexpr double kRadius = 6;
 // The seen depth below the top at angle θ round the hole: 3 to 7 mm.
 double seen_depth(const Vec3& p) { return 5 + 2 * std::sin(std::atan2(p.y() - kCentre.y(), p.x() - kCentre.x())); }
 
+// The mesh without the facets `drop` names by centroid and normal, as a scan that did not see them.
+template <class Drop>
+TriangleMesh without(TriangleMesh mesh, Drop drop) {
+  const FaceGeometry faces = face_geometry(mesh);
+  Triangles kept(mesh.faces.rows(), 3);
+  Eigen::Index count = 0;
+  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
+    if (!drop(face_centroid(mesh, static_cast<int>(f)), Vec3(faces.normals.row(f).transpose()))) kept.row(count++) = mesh.faces.row(f);
+  kept.conservativeResize(count, 3);
+  mesh.faces = kept;
+  return mesh;
+}
+
 // The plate without its underside and with the Ø12 wall below the seen depth; `keep_wall` false drops
 // that wall entirely (the scan never saw it). With `notch`, the scan also missed the wall and 1 mm of
 // the top face over 20° of the rim: its crease is no closed curve, only the wall says it is a hole.
 TriangleMesh seen_plate(bool keep_wall, double noise_mm, bool notch = false) {
   TriangleMesh mesh = make_plate_with_holes(0.4).mesh;
   if (noise_mm > 0) mesh = with_gaussian_noise(mesh, noise_mm, 20261206);
-  const FaceGeometry faces = face_geometry(mesh);
-  Triangles kept(mesh.faces.rows(), 3);
-  Eigen::Index count = 0;
-  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
-    const Vec3 c = face_centroid(mesh, static_cast<int>(f));
+  return without(mesh, [&](const Vec3& c, const Vec3& n) {
     const double from_axis = std::hypot(c.x() - kCentre.x(), c.y() - kCentre.y());
-    const bool underside = c.z() < 0.3 && faces.normals(f, 2) < -0.7;
-    const bool this_wall = std::abs(from_axis - kRadius) < 0.3 && std::abs(faces.normals(f, 2)) < 0.7;
+    const bool underside = c.z() < 0.3 && n.z() < -0.7;
+    const bool this_wall = std::abs(from_axis - kRadius) < 0.3 && std::abs(n.z()) < 0.7;
     const bool notched = notch && std::abs(std::atan2(c.y() - kCentre.y(), c.x() - kCentre.x())) < 10 * std::numbers::pi / 180 &&
-                         (this_wall || (faces.normals(f, 2) > 0.7 && from_axis < kRadius + 1));
-    if (underside || notched || (this_wall && (!keep_wall || c.z() < 10 - seen_depth(c)))) continue;
-    kept.row(count++) = mesh.faces.row(f);
-  }
-  kept.conservativeResize(count, 3);
-  mesh.faces = kept;
-  return mesh;
+                         (this_wall || (n.z() > 0.7 && from_axis < kRadius + 1));
+    return underside || notched || (this_wall && (!keep_wall || c.z() < 10 - seen_depth(c)));
+  });
 }
 
 // The hole loop nearest the Ø12 hole's axis.
@@ -69,6 +75,35 @@ TEST(WallHole, APartlySeenWallGivesItsCircleAxisEntryAndSeenDepth) {
     EXPECT_LT(std::hypot(hole->entry_centre.x() - kCentre.x(), hole->entry_centre.y() - kCentre.y()), 0.05) << "noise " << noise;
     EXPECT_NEAR(hole->entry_centre.z(), 10, 0.4) << "noise " << noise;
     EXPECT_NEAR(hole->seen_depth_mm, 7, 0.5) << "noise " << noise;
+  }
+}
+
+// The Ø6 hole at (100, 20) as one grazing view leaves it: its wall seen on the +x half only, 7 mm down
+// where the view looked straight in and up to the rim at ±y, the −x half not at all. The loop runs along
+// the rim on one side and deep down the wall on the other: deeper than the hole is wide, so neither the
+// loop's spread nor its facets' normals show the axis (the merged partial views of the plate at σ ε/4).
+TEST(WallHole, AWallSeenOnOneSideDeeperThanTheHoleIsWide) {
+  const Vec3 centre(100, 20, 0);
+  for (const double noise : {0.0, 0.02}) {
+    TriangleMesh mesh = make_plate_with_holes(0.4).mesh;
+    if (noise > 0) mesh = with_gaussian_noise(mesh, noise, 20261207);
+    mesh = without(mesh, [&](const Vec3& c, const Vec3& n) {
+      const double from_axis = std::hypot(c.x() - centre.x(), c.y() - centre.y());
+      const bool this_wall = from_axis < 3.3 && std::abs(n.z()) < 0.7;
+      return (c.z() < 0.3 && n.z() < -0.7) || (this_wall && c.z() < 10 - 7 * (c.x() - centre.x()) / std::max(1e-9, from_axis));
+    });
+    const EdgeAdjacency adjacency = edge_adjacency(mesh);
+    std::optional<WallHole> hole;
+    for (const BoundaryLoop& loop : boundary_loops(mesh, adjacency)) {
+      Vec3 mean = Vec3::Zero();
+      for (int v : loop.vertices) mean += vertex(mesh, v) / static_cast<double>(loop.vertices.size());
+      if (std::hypot(mean.x() - centre.x(), mean.y() - centre.y()) < 3) hole = wall_hole(mesh, adjacency, face_geometry(mesh), loop, 0.05);
+    }
+    ASSERT_TRUE(hole) << "noise " << noise;
+    EXPECT_GT(hole->axis.z(), 0.999) << "noise " << noise;
+    EXPECT_NEAR(hole->radius, 3, 0.02 * 3) << "noise " << noise;
+    EXPECT_LT(std::hypot(hole->entry_centre.x() - centre.x(), hole->entry_centre.y() - centre.y()), 0.05) << "noise " << noise;
+    EXPECT_NEAR(hole->entry_centre.z(), 10, 0.4) << "noise " << noise;
   }
 }
 
