@@ -1,11 +1,72 @@
-// Seen faces by centroid visibility, then their boundary loops; see scan_borders.hpp.
+// Seen faces by centroid visibility, then their boundary loops and how wide the region beyond or within
+// each is; see scan_borders.hpp.
 #include "sim/scan_borders.hpp"
 
+#include <algorithm>
+#include <memory>
 #include <stdexcept>
 
+#include "geometry/cloud_index.hpp"
 #include "geometry/edge_adjacency.hpp"
 
 namespace cmm::sim {
+namespace {
+
+// The connected regions of the faces on one side (seen or unseen), each with its half width: the largest
+// distance from one of its faces' centroids to the nearest centroid of a face on the other side.
+class RegionWidths {
+ public:
+  RegionWidths(const geometry::EdgeAdjacency& adjacency, const geometry::Points& centroids, std::vector<bool> inside)
+      : adjacency_(adjacency), centroids_(centroids), inside_(std::move(inside)), region_(inside_.size(), -1) {
+    for (std::size_t f = 0; f < inside_.size(); ++f)
+      if (!inside_[f]) others_.push_back(static_cast<int>(f));
+    other_centroids_.resize(static_cast<Eigen::Index>(others_.size()), 3);
+    for (std::size_t i = 0; i < others_.size(); ++i) other_centroids_.row(static_cast<Eigen::Index>(i)) = centroids_.row(others_[i]);
+    others_index_ = std::make_unique<geometry::CloudIndex>(other_centroids_);
+  }
+
+  // The half width of the region holding face f (0 for a face on the other side).
+  double of(int f) {
+    if (!inside_[static_cast<std::size_t>(f)]) return 0;
+    if (region_[static_cast<std::size_t>(f)] < 0) flood(f);
+    return widths_[static_cast<std::size_t>(region_[static_cast<std::size_t>(f)])];
+  }
+
+ private:
+  void flood(int start) {
+    const int id = static_cast<int>(widths_.size());
+    double width = 0;
+    std::vector<int> stack{start};
+    region_[static_cast<std::size_t>(start)] = id;
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      if (!others_.empty()) {
+        const geometry::Vec3 c = centroids_.row(f).transpose();
+        const int nearest = others_index_->nearest(c, 1).front();
+        width = std::max(width, (other_centroids_.row(nearest).transpose() - c).norm());
+      }
+      for (int k = 0; k < 3; ++k) {
+        const int g = adjacency_.other_face(adjacency_.face_edges(f, k), f);
+        if (g >= 0 && inside_[static_cast<std::size_t>(g)] && region_[static_cast<std::size_t>(g)] < 0) {
+          region_[static_cast<std::size_t>(g)] = id;
+          stack.push_back(g);
+        }
+      }
+    }
+    widths_.push_back(width);
+  }
+
+  const geometry::EdgeAdjacency& adjacency_;
+  const geometry::Points& centroids_;
+  std::vector<bool> inside_;
+  std::vector<int> region_, others_;
+  geometry::Points other_centroids_;
+  std::unique_ptr<geometry::CloudIndex> others_index_;
+  std::vector<double> widths_;
+};
+
+}  // namespace
 
 std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const std::vector<ScanView>& views,
                                      double max_incidence_deg, const std::vector<CoverageBand>& coverage) {
@@ -13,19 +74,29 @@ std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const 
     throw std::invalid_argument("scan borders: one coverage band per view, or none");
   const ScanVisibility visibility(scene, max_incidence_deg);
   geometry::TriangleMesh seen{scene.vertices, geometry::Triangles(scene.faces.rows(), 3), {}};
-  Eigen::Index kept = 0;
+  std::vector<int> scene_face;  // of each row of seen.faces
+  std::vector<bool> is_seen(static_cast<std::size_t>(scene.faces.rows()), false);
+  geometry::Points centroids(scene.faces.rows(), 3);
   for (Eigen::Index f = 0; f < scene.faces.rows(); ++f) {
     geometry::Vec3 centroid = geometry::Vec3::Zero();
     for (int k = 0; k < 3; ++k) centroid += geometry::vertex(scene, scene.faces(f, k));
     centroid /= 3;
+    centroids.row(f) = centroid.transpose();
     for (std::size_t v = 0; v < views.size(); ++v)
       if ((coverage.empty() || coverage[v].keeps(centroid)) &&
           visibility.sees(centroid, static_cast<int>(f), views[v].direction)) {
-        seen.faces.row(kept++) = scene.faces.row(f);
+        seen.faces.row(static_cast<Eigen::Index>(scene_face.size())) = scene.faces.row(f);
+        scene_face.push_back(static_cast<int>(f));
+        is_seen[static_cast<std::size_t>(f)] = true;
         break;
       }
   }
-  seen.faces.conservativeResize(kept, 3);
+  seen.faces.conservativeResize(static_cast<Eigen::Index>(scene_face.size()), 3);
+
+  const geometry::EdgeAdjacency scene_adjacency = geometry::edge_adjacency(scene);
+  std::vector<bool> is_unseen(is_seen.size());
+  std::transform(is_seen.begin(), is_seen.end(), is_unseen.begin(), [](bool s) { return !s; });
+  RegionWidths seen_widths(scene_adjacency, centroids, is_seen), unseen_widths(scene_adjacency, centroids, is_unseen);
   std::vector<ScanBorder> borders;
   for (const geometry::BoundaryLoop& loop : geometry::boundary_loops(seen, geometry::edge_adjacency(seen))) {
     ScanBorder border;
@@ -35,6 +106,12 @@ std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const 
     border.perimeter_mm = loop.perimeter;
     border.kind = loop.kind;
     border.surface_normal = loop.surface_normal;
+    for (int h : loop.half_edges) {
+      const int f = scene_face[static_cast<std::size_t>(geometry::EdgeAdjacency::face_of(h))];
+      const int g = scene_adjacency.other_face(scene_adjacency.face_edges(f, geometry::EdgeAdjacency::side_of(h)), f);
+      border.seen_half_width_mm = std::max(border.seen_half_width_mm, seen_widths.of(f));
+      if (g >= 0) border.unseen_half_width_mm = std::max(border.unseen_half_width_mm, unseen_widths.of(g));
+    }
     borders.push_back(border);
   }
   return borders;

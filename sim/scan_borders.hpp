@@ -18,6 +18,12 @@ struct ScanBorder {
   double perimeter_mm = 0;
   geometry::LoopKind kind = geometry::LoopKind::outer;
   geometry::Vec3 surface_normal;  // of the seen surface next to the border
+  // How wide the unseen region beyond the border and the seen one within it are: the largest distance
+  // from one of the region's face centroids to the nearest on the other side (half a strip's width, a
+  // round patch's radius). A scan's mesh closes an unseen region no wider than its gap rule's reach
+  // (docs/scan.md, "Gap or opening") and has no piece for a seen speck narrower than a bin or two.
+  double unseen_half_width_mm = 0;
+  double seen_half_width_mm = 0;
 };
 
 // A face counts as seen when some view sees its centroid (within the view's coverage band, when given:
