@@ -33,7 +33,10 @@ constexpr std::size_t kMaxPatchFaces = 2000;  // a curved patch bigger than this
 constexpr double kMinPatchAngle = 10 * std::numbers::pi / 180;  // region growing's smallest facet angle
 constexpr std::size_t kMaxLeastFoldingLoop = 300;  // O(n³): about 0.1 s at this size
 constexpr double kMaxPatchFold = 160 * std::numbers::pi / 180;  // folding onto itself: an outline's patch
-constexpr double kMinPatchFacing = 0.3;  // mean cosine between the patch's normal and its rim facets'
+// The mean cosine between the patch's normal and its rim facets' normals: about 0.7 across a right-angled
+// crease, 0.29 over the end of the plate's slot (its wall a half circle of 3 B: the normals fan out),
+// below 0 for an outline's (a second sheet over the surface).
+constexpr double kMinPatchFacing = 0.15;
 constexpr double kMaxStripWidthBins = 3;  // a loop longer than a short one's limit is a strip up to this wide
 constexpr double kStripApartBins = 6;     // measured to vertices at least this far along the loop
 constexpr std::size_t kMaxStripPiece = 150;
