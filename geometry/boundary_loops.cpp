@@ -87,4 +87,17 @@ std::vector<BoundaryLoop> boundary_loops(const TriangleMesh& mesh, const EdgeAdj
   return loops;
 }
 
+Vec3 loop_centre(const TriangleMesh& mesh, const std::vector<int>& vertices) {
+  Vec3 sum = Vec3::Zero(), mean = Vec3::Zero();
+  double length = 0;
+  const std::size_t n = vertices.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 a = vertex(mesh, vertices[i]), b = vertex(mesh, vertices[(i + 1) % n]);
+    sum += (a + b) / 2 * (b - a).norm();
+    length += (b - a).norm();
+    mean += a / static_cast<double>(n);
+  }
+  return length > 0 ? Vec3(sum / length) : mean;
+}
+
 }  // namespace cmm::geometry

@@ -22,4 +22,8 @@ struct BoundaryLoop {
 
 std::vector<BoundaryLoop> boundary_loops(const TriangleMesh& mesh, const EdgeAdjacency& adjacency);
 
+// Where a loop lies: the centroid of its sides weighted by their length, which does not move with how
+// densely its vertices are spaced (a scan's border is denser where the views overlapped).
+Vec3 loop_centre(const TriangleMesh& mesh, const std::vector<int>& vertices);
+
 }  // namespace cmm::geometry

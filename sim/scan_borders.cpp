@@ -100,9 +100,7 @@ std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const 
   std::vector<ScanBorder> borders;
   for (const geometry::BoundaryLoop& loop : geometry::boundary_loops(seen, geometry::edge_adjacency(seen))) {
     ScanBorder border;
-    border.centre = geometry::Vec3::Zero();
-    for (int v : loop.vertices) border.centre += geometry::vertex(seen, v);
-    border.centre /= static_cast<double>(loop.vertices.size());
+    border.centre = geometry::loop_centre(seen, loop.vertices);
     border.perimeter_mm = loop.perimeter;
     border.kind = loop.kind;
     border.surface_normal = loop.surface_normal;

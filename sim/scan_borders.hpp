@@ -14,7 +14,7 @@
 namespace cmm::sim {
 
 struct ScanBorder {
-  geometry::Vec3 centre;        // mean of the loop's vertices, scene frame
+  geometry::Vec3 centre;        // the loop's centre by length (geometry::loop_centre), scene frame
   double perimeter_mm = 0;
   geometry::LoopKind kind = geometry::LoopKind::outer;
   geometry::Vec3 surface_normal;  // of the seen surface next to the border

@@ -54,6 +54,22 @@ TEST(MeshTopology, OpenGridHasOneOuterLoop) {
   EXPECT_NEAR(loops[0].perimeter, 40, 1e-12);
 }
 
+// A 10 × 10 square whose left side carries 20 vertices and the others 1 each: the mean of the vertices
+// sits 3.2 mm left of the middle, the centre by length in it.
+TEST(MeshTopology, ALoopsCentreDoesNotMoveWithHowDenselyItsVerticesLie) {
+  TriangleMesh m;
+  m.vertices.resize(23, 3);
+  for (int i = 0; i <= 20; ++i) m.vertices.row(i) << 0, 10 - 0.5 * i, 0;  // down the left side
+  m.vertices.row(21) << 10, 0, 0;
+  m.vertices.row(22) << 10, 10, 0;
+  std::vector<int> loop;
+  for (int i = 0; i <= 22; ++i) loop.push_back(i);
+  Vec3 mean = Vec3::Zero();
+  for (int v : loop) mean += vertex(m, v) / 23.0;
+  EXPECT_LT(mean.x(), 2);
+  EXPECT_LT((loop_centre(m, loop) - Vec3(5, 5, 0)).norm(), 1e-12);
+}
+
 TEST(MeshTopology, SquareHoleIsClassifiedAsHole) {
   const TriangleMesh m = without_faces(grid(10, 10), [](const Vec3& c) {
     return c.x() > 4 && c.x() < 6 && c.y() > 4 && c.y() < 6;

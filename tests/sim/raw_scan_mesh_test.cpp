@@ -81,9 +81,7 @@ void expect_borders(const ScannedPart& s, bool exactly) {
   }
   std::vector<bool> matched(s.borders.size(), false);
   for (const geometry::BoundaryLoop& loop : loops) {
-    geometry::Vec3 centre = geometry::Vec3::Zero();
-    for (int v : loop.vertices) centre += geometry::vertex(s.meshed.mesh, v);
-    centre /= static_cast<double>(loop.vertices.size());
+    const geometry::Vec3 centre = geometry::loop_centre(s.meshed.mesh, loop.vertices);
     int best = -1;
     for (std::size_t b = 0; b < s.borders.size(); ++b)
       if ((s.borders[b].centre - centre).norm() < 3 && s.borders[b].kind == loop.kind) best = static_cast<int>(b);

@@ -153,14 +153,13 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
     if (b.unseen_half_width_mm <= 1.5 * bin) return Expect::closed;
     return b.unseen_half_width_mm > 3 * bin ? Expect::open : Expect::either;
   };
-  // Loops against the borders: same kind, centres within 3 mm, one each.
+  // Loops against the borders: same kind, centres (by length, as the borders') within 3 mm, one each.
   out.borders = static_cast<std::size_t>(std::count_if(borders.begin(), borders.end(), [&](const sim::ScanBorder& b) { return expected(b) == Expect::open; }));
   out.loops = model.loops.size();
   out.non_manifold = model.topology.non_manifold_edges;
   std::vector<bool> matched(borders.size(), false);
   for (const geometry::BoundaryLoop& loop : model.loops) {
-    Vec3 centre = Vec3::Zero();
-    for (int v : loop.vertices) centre += geometry::vertex(reference.mesh, v) / static_cast<double>(loop.vertices.size());
+    const Vec3 centre = geometry::loop_centre(reference.mesh, loop.vertices);
     int best = -1;
     for (std::size_t b = 0; b < borders.size(); ++b)
       if (!matched[b] && borders[b].kind == loop.kind && (borders[b].centre - centre).norm() < 3) best = static_cast<int>(b);
@@ -178,8 +177,7 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
                   borders[b].perimeter_mm, borders[b].seen_half_width_mm, borders[b].unseen_half_width_mm, borders[b].centre.x(),
                   borders[b].centre.y(), borders[b].centre.z(), to_string(expected(borders[b])), matched[b] ? "" : ": no loop");
     for (const geometry::BoundaryLoop& loop : model.loops) {
-      Vec3 centre = Vec3::Zero();
-      for (int v : loop.vertices) centre += geometry::vertex(reference.mesh, v) / static_cast<double>(loop.vertices.size());
+      const Vec3 centre = geometry::loop_centre(reference.mesh, loop.vertices);
       std::printf("loop %s %.1f mm at (%.2f %.2f %.2f)\n", kind(loop.kind), loop.perimeter, centre.x(), centre.y(), centre.z());
     }
     for (const geometry::Hole& h : model.holes)
