@@ -162,6 +162,34 @@ TEST(FeatureModelOnCadExports, FindEveryHoleHoweverLongTheFacetsBesideIt) {
   }
 }
 
+// A scan's crease points lie where the faces' fitted planes meet, and a wall's plane fitted over an
+// arc lies inside it: the plate's rims from a scan without noise came out up to 0.09 mm inside their
+// bores (3 % on the Ø6), with the facets beside them tilted into a draft of 0.7°. Here every rim
+// vertex of the clean plate is moved 0.09 mm towards its axis: each bore's diameter is its wall's.
+TEST(FeatureModelOnScans, ABoresDiameterIsItsWallsWhereTheRimsCreasePointsLieInsideIt) {
+  AnalyticPart part = make_plate_with_holes(0.4);
+  for (const TrueHole& truth : part.holes)
+    for (Eigen::Index v = 0; v < part.mesh.vertices.rows(); ++v) {
+      const Vec3 p = vertex(part.mesh, v);
+      Vec3 off = p - truth.centre;
+      off -= off.dot(truth.axis) * truth.axis;
+      // The plate's bores run through it, z 0 to 10.
+      const bool on_a_rim = std::abs(off.norm() - truth.radius) < 1e-6 && (std::abs(p.z()) < 1e-6 || std::abs(p.z() - 10) < 1e-6);
+      if (on_a_rim) part.mesh.vertices.row(v) = (p - 0.09 * off.normalized()).transpose();
+    }
+  const FeatureModel model = extract_features(part.mesh);
+  EXPECT_FALSE(model.features.noisy);
+  ASSERT_EQ(model.holes.size(), part.holes.size());
+  for (const TrueHole& truth : part.holes) {
+    const auto found = std::find_if(model.holes.begin(), model.holes.end(), [&](const Hole& h) {
+      const Vec3 off = h.centre - truth.centre;
+      return (off - off.dot(truth.axis) * truth.axis).norm() < 0.05;
+    });
+    ASSERT_NE(found, model.holes.end()) << "no hole on the axis of the one at " << truth.centre.transpose();
+    EXPECT_NEAR(found->radius, truth.radius, 0.002 * truth.radius) << "the hole at " << truth.centre.transpose();
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(AnalyticParts, FeatureModelOnParts,
                          ::testing::Combine(::testing::ValuesIn(cases()), ::testing::Values(clean, noisy)),
                          [](const auto& info) {
