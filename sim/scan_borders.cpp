@@ -22,7 +22,7 @@ class RegionWidths {
       if (!inside_[f]) others_.push_back(static_cast<int>(f));
     other_centroids_.resize(static_cast<Eigen::Index>(others_.size()), 3);
     for (std::size_t i = 0; i < others_.size(); ++i) other_centroids_.row(static_cast<Eigen::Index>(i)) = centroids_.row(others_[i]);
-    others_index_ = std::make_unique<geometry::CloudIndex>(other_centroids_);
+    if (!others_.empty()) others_index_ = std::make_unique<geometry::CloudIndex>(other_centroids_);
   }
 
   // The half width of the region holding face f (0 for a face on the other side).
@@ -104,6 +104,7 @@ std::vector<ScanBorder> scan_borders(const geometry::TriangleMesh& scene, const 
     border.perimeter_mm = loop.perimeter;
     border.kind = loop.kind;
     border.surface_normal = loop.surface_normal;
+    for (int v : loop.vertices) border.points.push_back(geometry::vertex(seen, v));
     for (int h : loop.half_edges) {
       const int f = scene_face[static_cast<std::size_t>(geometry::EdgeAdjacency::face_of(h))];
       const int g = scene_adjacency.other_face(scene_adjacency.face_edges(f, geometry::EdgeAdjacency::side_of(h)), f);

@@ -18,6 +18,7 @@ struct ScanBorder {
   double perimeter_mm = 0;
   geometry::LoopKind kind = geometry::LoopKind::outer;
   geometry::Vec3 surface_normal;  // of the seen surface next to the border
+  std::vector<geometry::Vec3> points;  // the border's corners in order, scene frame
   // How wide the unseen region beyond the border and the seen one within it are: the largest distance
   // from one of the region's face centroids to the nearest on the other side (half a strip's width, a
   // round patch's radius). A scan's mesh closes an unseen region no wider than its gap rule's reach

@@ -73,7 +73,15 @@ TEST(ScanBorders, CoverageBandsCutTheSeenRegion) {
   const auto part = geometry::make_analytic_part("cube", 2.0);
   const std::vector<ScanView> above{{geometry::Vec3(0, 0, -1)}};
   ASSERT_EQ(scan_borders(part.mesh, above).size(), 1u);
-  EXPECT_NEAR(scan_borders(part.mesh, above)[0].perimeter_mm, 4 * 40, 1e-6);
+  const ScanBorder top = scan_borders(part.mesh, above)[0];
+  EXPECT_NEAR(top.perimeter_mm, 4 * 40, 1e-6);
+  // Its corners in order: the polyline through them is the border, as long as it.
+  double length = 0;
+  for (std::size_t i = 0; i < top.points.size(); ++i) {
+    length += (top.points[(i + 1) % top.points.size()] - top.points[i]).norm();
+    EXPECT_NEAR(top.points[i].z(), 40, 1e-9);
+  }
+  EXPECT_NEAR(length, 4 * 40, 1e-6);
   const ScanVisibility visibility(part.mesh);
   const std::vector<CoverageBand> half = coverage_bands(visibility, above, 0.5, CoverageMeasure::surface_area, 3);
   const std::vector<ScanBorder> borders = scan_borders(part.mesh, above, kDefaultMaxIncidenceDeg, half);

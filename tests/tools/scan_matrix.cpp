@@ -1,8 +1,8 @@
 // scan-matrix: the scan front end on one part scanned every way (issue 36). For each part, sampling,
 // noise level and seed it synthesizes a raw scan, loads it through the one reference-model loader (as
 // cmm-plan and cmmd do), plans it, and holds the result against the truth: boundary loops = the borders
-// of the seen region exactly (an unseen region narrower than the gap rule's reach closed, a seen speck
-// left out), no non-manifold edge, every through hole found with its rim fitted, the
+// of the seen region exactly, each loop running along its border (an unseen region narrower than the gap
+// rule's reach closed, a seen speck left out), no non-manifold edge, every through hole found with its rim fitted, the
 // mesh within ε + 3σ of the true surface (99th percentile), and the probeable share of the plan's points
 // on the part's true sharp edges and rims (a border's points never are probeable; points off every true
 // edge are folds of noise, counted apart) within 5 points of the same part's grid-scanned plan, where
@@ -60,6 +60,7 @@ struct Outcome {
   std::size_t borders = 0, loops = 0, false_loops = 0, missed_borders = 0, non_manifold = 0;
   std::size_t holes_true = 0, holes_found = 0;
   double worst_radius_pct = 0, worst_centre_mm = 0;
+  double off_border_pct = 0;  // the largest share of a border's loop more than 3 B off it
   double p99_mm = 0;
   std::size_t features = 0;           // plan points on a true sharp edge or rim (not border points)
   std::size_t spurious_features = 0;  // sharp-edge or rim points off every true edge
@@ -112,6 +113,36 @@ double p99_distance(const geometry::TriangleMesh& mesh, const geometry::BallSwee
   return *at;
 }
 
+// A closed polyline resampled every `step` or closer, corners kept.
+geometry::Points densified(const std::vector<Vec3>& corners, double step) {
+  std::vector<Vec3> out;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const Vec3 &a = corners[i], &b = corners[(i + 1) % corners.size()];
+    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
+    for (int k = 0; k < n; ++k) out.push_back(a + (b - a) * (static_cast<double>(k) / n));
+  }
+  geometry::Points p(static_cast<Eigen::Index>(out.size()), 3);
+  for (std::size_t i = 0; i < out.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = out[i].transpose();
+  return p;
+}
+
+// The share of closed polyline a's length that lies within `reach` of closed polyline b.
+double share_within(const std::vector<Vec3>& a, const std::vector<Vec3>& b, double reach) {
+  if (a.empty() || b.empty()) return 0;
+  const geometry::Points along_b = densified(b, reach / 4);
+  const geometry::PointGrid grid(along_b, reach);
+  double total = 0, near = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Vec3 &p = a[i], &q = a[(i + 1) % a.size()];
+    const double length = (q - p).norm();
+    bool found = false;
+    grid.for_each_within(0.5 * (p + q), reach, [&](int, double) { found = true; });
+    total += length;
+    near += found ? length : 0;
+  }
+  return total > 0 ? near / total : 0;
+}
+
 Outcome run(const Case& c, double spacing, double eps, double offset_mm, double strays, std::size_t max_points,
             const std::filesystem::path& dir) {
   const auto start = std::chrono::steady_clock::now();
@@ -153,21 +184,31 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
     if (b.unseen_half_width_mm <= 1.5 * bin) return Expect::closed;
     return b.unseen_half_width_mm > 3 * bin ? Expect::open : Expect::either;
   };
-  // Loops against the borders: same kind, centres (by length, as the borders') within 3 mm, one each.
+  // Loops against the borders, one each, of the same kind: a loop is a border's when it runs along it —
+  // 90 % of the border's length within 3 B of the loop (the gap rule's reach: the mesh need not follow
+  // the border closer than a void it may leave) and half of the loop's within 3 B of the border (the rest
+  // a ragged edge: notches of a sparsely seen face's fringe, reported as "off border").
   out.borders = static_cast<std::size_t>(std::count_if(borders.begin(), borders.end(), [&](const sim::ScanBorder& b) { return expected(b) == Expect::open; }));
   out.loops = model.loops.size();
   out.non_manifold = model.topology.non_manifold_edges;
+  const double reach = 3 * bin;
   std::vector<bool> matched(borders.size(), false);
   for (const geometry::BoundaryLoop& loop : model.loops) {
-    const Vec3 centre = geometry::loop_centre(reference.mesh, loop.vertices);
+    std::vector<Vec3> corners;
+    for (int v : loop.vertices) corners.push_back(geometry::vertex(reference.mesh, v));
     int best = -1;
-    for (std::size_t b = 0; b < borders.size(); ++b)
-      if (!matched[b] && borders[b].kind == loop.kind && (borders[b].centre - centre).norm() < 3) best = static_cast<int>(b);
+    double best_score = 0, best_own = 0;
+    for (std::size_t b = 0; b < borders.size(); ++b) {
+      if (matched[b] || borders[b].kind != loop.kind) continue;
+      const double cover = share_within(borders[b].points, corners, reach), own = share_within(corners, borders[b].points, reach);
+      if (cover >= 0.9 && own >= 0.5 && cover + own > best_score) best = static_cast<int>(b), best_score = cover + own, best_own = own;
+    }
     if (best < 0 || expected(borders[static_cast<std::size_t>(best)]) == Expect::closed) {
       ++out.false_loops;
       continue;
     }
     matched[static_cast<std::size_t>(best)] = true;
+    out.off_border_pct = std::max(out.off_border_pct, 100 * (1 - best_own));
   }
   for (std::size_t b = 0; b < borders.size(); ++b) out.missed_borders += !matched[b] && expected(borders[b]) == Expect::open;
   if (std::getenv("SCAN_MATRIX_VERBOSE")) {
@@ -178,7 +219,14 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
                   borders[b].centre.y(), borders[b].centre.z(), to_string(expected(borders[b])), matched[b] ? "" : ": no loop");
     for (const geometry::BoundaryLoop& loop : model.loops) {
       const Vec3 centre = geometry::loop_centre(reference.mesh, loop.vertices);
-      std::printf("loop %s %.1f mm at (%.2f %.2f %.2f)\n", kind(loop.kind), loop.perimeter, centre.x(), centre.y(), centre.z());
+      std::printf("loop %s %.1f mm at (%.2f %.2f %.2f)", kind(loop.kind), loop.perimeter, centre.x(), centre.y(), centre.z());
+      std::vector<Vec3> corners;
+      for (int v : loop.vertices) corners.push_back(geometry::vertex(reference.mesh, v));
+      for (std::size_t b = 0; b < borders.size(); ++b) {
+        const double cover = share_within(borders[b].points, corners, reach), own = share_within(corners, borders[b].points, reach);
+        if (cover > 0.2 || own > 0.2) std::printf("; along border %zu: %.0f %% of it, %.0f %% of the loop", b, 100 * cover, 100 * own);
+      }
+      std::printf("\n");
     }
     for (const geometry::Hole& h : model.holes)
       std::printf("hole %s r %.3f at (%.3f %.3f %.3f)\n", geometry::to_string(h.source), h.radius, h.centre.x(), h.centre.y(), h.centre.z());
@@ -307,8 +355,8 @@ int main(int argc, char** argv) {
 
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("scan-matrix-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  std::printf("| part | sampling | σ mm | seed | points | B mm | loops (borders) | false | closed | non-manifold | holes found | radius err %% | centre mm | p99 mm | features (off true edges) | probeable %% | Δ grid pp | s | verdict |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| part | sampling | σ mm | seed | points | B mm | loops (borders) | false | closed | off border %% | non-manifold | holes found | radius err %% | centre mm | p99 mm | features (off true edges) | probeable %% | Δ grid pp | s | verdict |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   int failed = 0, total = 0;
   std::map<std::string, std::vector<std::pair<Vec3, bool>>> grid_points;
   for (const std::string& part : split(parts))
@@ -334,9 +382,9 @@ int main(int argc, char** argv) {
             ++failed;
           }
           ++total;
-          std::printf("| %s | %s | %.3g | %llu | %zu | %.3f | %zu (%zu) | %zu | %zu | %zu | %zu/%zu | %.2f | %.3f | %.3f | %zu (%zu) | %.1f | %s | %.1f | %s |\n",
+          std::printf("| %s | %s | %.3g | %llu | %zu | %.3f | %zu (%zu) | %zu | %zu | %.0f | %zu | %zu/%zu | %.2f | %.3f | %.3f | %zu (%zu) | %.1f | %s | %.1f | %s |\n",
                       part.c_str(), sampling.c_str(), c.sigma, static_cast<unsigned long long>(c.seed), o.points, o.bin_mm,
-                      o.loops, o.borders, o.false_loops, o.missed_borders, o.non_manifold, o.holes_found, o.holes_true,
+                      o.loops, o.borders, o.false_loops, o.missed_borders, o.off_border_pct, o.non_manifold, o.holes_found, o.holes_true,
                       o.worst_radius_pct, o.worst_centre_mm, o.p99_mm, o.features, o.spurious_features, o.probeable,
                       delta_text.c_str(), o.seconds, verdict.c_str());
           std::fflush(stdout);
