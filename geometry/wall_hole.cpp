@@ -187,25 +187,35 @@ std::optional<WallHole> round_axis(const TriangleMesh& mesh, const EdgeAdjacency
   return hole;
 }
 
-// The normal most of the facets beside the loop share: the face the hole opens in, where the loop runs
-// along the rim on one side and deep down a wall seen on the other (the wall's normals fan out round the
-// axis, the face's agree). A wall seen deeper than the hole is wide hides the axis from the loop's spread
-// and from the normals' scatter alike.
-Vec3 entry_normal(const FaceGeometry& faces, const BoundaryLoop& loop) {
+// The normals most of the facets beside the loop share, the largest group first: one of them is the face
+// the hole opens in, where the loop runs along the rim on one side and deep down a wall seen on the other
+// (the wall's normals fan out round the axis, the face's agree). A wall seen deeper than the hole is wide
+// hides the axis from the loop's spread and from the normals' scatter alike; and where the loop runs along
+// the rim for a third of the way round, a stretch of wall 15° round may have as many facets beside it as
+// the face (the plate's Ø8 bore in the merged partial views: 10 against 11), so the three largest groups.
+std::vector<Vec3> entry_normals(const FaceGeometry& faces, const BoundaryLoop& loop) {
   std::vector<Vec3> normals;
   for (int h : loop.half_edges) normals.push_back(faces.normals.row(EdgeAdjacency::face_of(h)).transpose());
   const double close = std::cos(15 * std::numbers::pi / 180);
-  std::size_t best = 0, best_count = 0;
   const std::size_t stride = std::max<std::size_t>(1, normals.size() / 256);  // a long outer loop stays linear
-  for (std::size_t i = 0; i < normals.size(); i += stride) {
-    const auto count = static_cast<std::size_t>(
-        std::count_if(normals.begin(), normals.end(), [&](const Vec3& n) { return n.dot(normals[i]) > close; }));
-    if (count > best_count) best = i, best_count = count;
+  std::vector<Vec3> groups;
+  std::vector<bool> taken(normals.size(), false);
+  while (groups.size() < 3) {
+    std::size_t best = 0, best_count = 0;
+    for (std::size_t i = 0; i < normals.size(); i += stride) {
+      if (taken[i]) continue;
+      std::size_t count = 0;
+      for (std::size_t j = 0; j < normals.size(); ++j) count += !taken[j] && normals[j].dot(normals[i]) > close;
+      if (count > best_count) best = i, best_count = count;
+    }
+    if (best_count == 0) break;
+    Vec3 mean = Vec3::Zero();
+    const Vec3 seed = normals[best];
+    for (std::size_t j = 0; j < normals.size(); ++j)
+      if (!taken[j] && normals[j].dot(seed) > close) mean += normals[j], taken[j] = true;
+    if (mean.norm() > 0) groups.push_back(mean.normalized());
   }
-  Vec3 mean = Vec3::Zero();
-  for (const Vec3& n : normals)
-    if (n.dot(normals[best]) > close) mean += n;
-  return mean.normalized();
+  return groups;
 }
 
 }  // namespace
@@ -228,8 +238,9 @@ std::optional<WallHole> wall_hole(const TriangleMesh& mesh, const EdgeAdjacency&
     normals += normal * normal.transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> by_spread(spread), by_normals(normals);
-  for (const Vec3& first_axis : {Vec3(by_spread.eigenvectors().col(0)), Vec3(by_normals.eigenvectors().col(0)),
-                                 Vec3(by_normals.eigenvectors().col(2)), entry_normal(faces, loop)})
+  std::vector<Vec3> starts{by_spread.eigenvectors().col(0), by_normals.eigenvectors().col(0), by_normals.eigenvectors().col(2)};
+  for (const Vec3& normal : entry_normals(faces, loop)) starts.push_back(normal);
+  for (const Vec3& first_axis : starts)
     if (auto hole = round_axis(mesh, adjacency, faces, loop, points, first_axis, circle_tolerance)) return hole;
   return std::nullopt;
 }

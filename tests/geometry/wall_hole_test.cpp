@@ -3,6 +3,7 @@
 // circle, axis, entry and seen depth; a rim loop lying in the top face (no wall) is not a wall's.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -78,6 +79,30 @@ TEST(WallHole, APartlySeenWallGivesItsCircleAxisEntryAndSeenDepth) {
   }
 }
 
+// The plate without its underside and with the wall of the hole of `radius` round `centre` seen down to
+// seen(θ) below the top (θ round the axis from +x), as a scan's views left it.
+template <class Seen>
+TriangleMesh plate_with_wall_seen(const Vec3& centre, double radius, double noise, Seen seen) {
+  TriangleMesh mesh = make_plate_with_holes(0.4).mesh;
+  if (noise > 0) mesh = with_gaussian_noise(mesh, noise, 20261207);
+  return without(mesh, [&](const Vec3& c, const Vec3& n) {
+    const bool this_wall = std::hypot(c.x() - centre.x(), c.y() - centre.y()) < radius + 0.3 && std::abs(n.z()) < 0.7;
+    return (c.z() < 0.3 && n.z() < -0.7) || (this_wall && c.z() < 10 - seen(std::atan2(c.y() - centre.y(), c.x() - centre.x())));
+  });
+}
+
+// The wall hole of a loop round the axis through `centre` (its vertices' mean within `within` of it).
+std::optional<WallHole> wall_hole_near(const TriangleMesh& mesh, const Vec3& centre, double within) {
+  const EdgeAdjacency adjacency = edge_adjacency(mesh);
+  for (const BoundaryLoop& loop : boundary_loops(mesh, adjacency)) {
+    Vec3 mean = Vec3::Zero();
+    for (int v : loop.vertices) mean += vertex(mesh, v) / static_cast<double>(loop.vertices.size());
+    if (std::hypot(mean.x() - centre.x(), mean.y() - centre.y()) < within)
+      if (auto hole = wall_hole(mesh, adjacency, face_geometry(mesh), loop, 0.05)) return hole;
+  }
+  return std::nullopt;
+}
+
 // The Ø6 hole at (100, 20) as one grazing view leaves it: its wall seen on the +x half only, 7 mm down
 // where the view looked straight in and up to the rim at ±y, the −x half not at all. The loop runs along
 // the rim on one side and deep down the wall on the other: deeper than the hole is wide, so neither the
@@ -85,25 +110,30 @@ TEST(WallHole, APartlySeenWallGivesItsCircleAxisEntryAndSeenDepth) {
 TEST(WallHole, AWallSeenOnOneSideDeeperThanTheHoleIsWide) {
   const Vec3 centre(100, 20, 0);
   for (const double noise : {0.0, 0.02}) {
-    TriangleMesh mesh = make_plate_with_holes(0.4).mesh;
-    if (noise > 0) mesh = with_gaussian_noise(mesh, noise, 20261207);
-    mesh = without(mesh, [&](const Vec3& c, const Vec3& n) {
-      const double from_axis = std::hypot(c.x() - centre.x(), c.y() - centre.y());
-      const bool this_wall = from_axis < 3.3 && std::abs(n.z()) < 0.7;
-      return (c.z() < 0.3 && n.z() < -0.7) || (this_wall && c.z() < 10 - 7 * (c.x() - centre.x()) / std::max(1e-9, from_axis));
-    });
-    const EdgeAdjacency adjacency = edge_adjacency(mesh);
-    std::optional<WallHole> hole;
-    for (const BoundaryLoop& loop : boundary_loops(mesh, adjacency)) {
-      Vec3 mean = Vec3::Zero();
-      for (int v : loop.vertices) mean += vertex(mesh, v) / static_cast<double>(loop.vertices.size());
-      if (std::hypot(mean.x() - centre.x(), mean.y() - centre.y()) < 3) hole = wall_hole(mesh, adjacency, face_geometry(mesh), loop, 0.05);
-    }
+    const TriangleMesh mesh = plate_with_wall_seen(centre, 3, noise, [](double angle) { return 7 * std::cos(angle); });
+    const std::optional<WallHole> hole = wall_hole_near(mesh, centre, 3);
     ASSERT_TRUE(hole) << "noise " << noise;
     EXPECT_GT(hole->axis.z(), 0.999) << "noise " << noise;
     EXPECT_NEAR(hole->radius, 3, 0.02 * 3) << "noise " << noise;
     EXPECT_LT(std::hypot(hole->entry_centre.x() - centre.x(), hole->entry_centre.y() - centre.y()), 0.05) << "noise " << noise;
     EXPECT_NEAR(hole->entry_centre.z(), 10, 0.4) << "noise " << noise;
+  }
+}
+
+// The Ø8 hole at (100, 60) as the merged partial views left it: its wall seen 5.5 to 9.5 mm down over two
+// thirds of the way round, not at all over the last third. The loop runs along the rim there only and
+// straight down the wall at either end of it.
+TEST(WallHole, AWallSeenDeepTwoThirdsOfTheWayRound) {
+  const Vec3 centre(100, 60, 0);
+  for (const double noise : {0.0, 0.02}) {
+    const TriangleMesh mesh = plate_with_wall_seen(centre, 4, noise, [](double angle) {
+      return std::cos(angle) > -0.5 ? 7.5 + 2 * std::sin(3 * angle) : 0.0;
+    });
+    const std::optional<WallHole> hole = wall_hole_near(mesh, centre, 4);
+    ASSERT_TRUE(hole) << "noise " << noise;
+    EXPECT_GT(hole->axis.z(), 0.999) << "noise " << noise;
+    EXPECT_NEAR(hole->radius, 4, 0.02 * 4) << "noise " << noise;
+    EXPECT_LT(std::hypot(hole->entry_centre.x() - centre.x(), hole->entry_centre.y() - centre.y()), 0.05) << "noise " << noise;
   }
 }
 
