@@ -104,6 +104,23 @@ TEST(HoleFilling, AGapBesideAFaceScannedSparselyClosesAtThatFacesDensity) {
   EXPECT_EQ(loops(mesh), 1u);
 }
 
+// A gap 4 × 12 mm in the side face, which was scanned every 0.7 mm (half a point per bin B²): 32 mm
+// round, longer than 60 B, and too wide for a thin strip. Such a face's own voids scale with its spacing
+// (r* about 2.4 mm at its rim), and so does the longest loop worth a patch: with the scan across it the
+// gap closes; an 8 mm opening with nothing scanned across it stays open.
+TEST(HoleFilling, ALongGapInAFaceScannedSparselyClosesAndAWiderOpeningThereDoesNot) {
+  for (const bool scanned_across : {true, false}) {
+    const Strip strip{scanned_across ? 4.0 : 8.0, 12, 1.5};
+    TriangleMesh mesh = folded_sheet_with_a(strip);
+    ASSERT_EQ(loops(mesh), 2u);
+    const Points raw = raw_scan(strip, scanned_across, 0.7);
+    const CloudIndex index(raw);
+    const HoleFilling filled = fill_false_holes(mesh, raw, index, options());
+    EXPECT_EQ(filled.loops_filled, scanned_across ? 1u : 0u) << (scanned_across ? "the gap" : "the opening");
+    EXPECT_EQ(loops(mesh), scanned_across ? 1u : 2u) << (scanned_across ? "the gap" : "the opening");
+  }
+}
+
 TEST(HoleFilling, AWiderStripWithNothingScannedAcrossItStaysOpenLongOrShort) {
   for (const double length : {38.0, 8.0}) {
     const Strip strip{2, length};
