@@ -37,6 +37,9 @@ constexpr double kMaxPatchFold = 160 * std::numbers::pi / 180;  // folding onto 
 // crease, 0.29 over the end of the plate's slot (its wall a half circle of 3 B: the normals fan out),
 // below 0 for an outline's (a second sheet over the surface).
 constexpr double kMinPatchFacing = 0.15;
+// How much more a refined least-folding patch may fold than its triangulation did before its new
+// vertices were put onto the raw surface (noise on a flat patch tilts facets by a few degrees).
+constexpr double kPatchRefineFold = 30 * std::numbers::pi / 180;
 constexpr double kMaxStripWidthBins = 3;  // a loop longer than a short one's limit is a strip up to this wide
 constexpr double kStripApartBins = 6;     // measured to vertices at least this far along the loop
 constexpr std::size_t kMaxStripPiece = 150;
@@ -458,6 +461,28 @@ class Filler {
     }
   }
 
+  // The largest angle between the normals of two patch facets sharing a side, or of a patch facet and
+  // the rim facet across a loop side (`rim[i]` beside cycle[i] → cycle[i + 1]).
+  double max_fold(const std::vector<Face>& faces, const std::vector<Vec3>& points, const std::vector<Vec3>& rim,
+                  const std::vector<int>& cycle) const {
+    // Each side's normal on the far side of it: the rim facet's along the loop, else the patch facet's.
+    std::unordered_map<std::uint64_t, Vec3> beyond;
+    for (std::size_t i = 0; i < cycle.size(); ++i) beyond.emplace(directed_key(cycle[i], cycle[(i + 1) % cycle.size()]), rim[i]);
+    std::vector<Vec3> normals;
+    for (const Face& f : faces) {
+      const Vec3 p = patch_position(f[0], points), q = patch_position(f[1], points), r = patch_position(f[2], points);
+      normals.push_back((q - p).cross(r - p).normalized());
+      for (int k = 0; k < 3; ++k) beyond.emplace(directed_key(f[k], f[(k + 1) % 3]), normals.back());
+    }
+    double worst = 0;
+    for (std::size_t i = 0; i < faces.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        const auto twin = beyond.find(directed_key(faces[i][(k + 1) % 3], faces[i][k]));
+        if (twin != beyond.end()) worst = std::max(worst, std::acos(std::clamp(normals[i].dot(twin->second), -1.0, 1.0)));
+      }
+    return worst;
+  }
+
   // No sliver: the growth's own smallest angle holds for a patch too.
   bool angles_above_minimum(const std::vector<Face>& faces, const std::vector<Vec3>& points) const {
     for (const Face& f : faces) {
@@ -538,9 +563,18 @@ class Filler {
       const Vec3 q = onto_raw(p, normal, bin_);
       return (q - p).norm() <= 0.5 * bin_ ? q : p;
     };
+    const std::vector<Face> unrefined = faces;
     if (!refine(cycle, faces, points, place)) {
       say(cycle, perimeter, "least folding patch too big", static_cast<double>(faces.size()));
       return false;
+    }
+    // Across a rim the line along the patch's normal may meet the face beyond the crease outside the
+    // loop, and a vertex put there folds the patch over (the grid scan's rims at 45° to its rows: facets
+    // facing down on the plate's top, read as concave edge points). Then the new vertices stay on their
+    // chords, where the patch folds no more than its least-folding triangulation does.
+    if (max_fold(faces, points, rim, cycle) > patch->max_dihedral_rad + kPatchRefineFold) {
+      faces = unrefined, points.clear();
+      refine(cycle, faces, points, [](const Vec3& p) { return p; });
     }
     return commit(faces, points, cycle, perimeter, "filled least folding");
   }
