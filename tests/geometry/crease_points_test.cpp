@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <set>
 
@@ -62,6 +64,41 @@ TEST(CreasePoints, FoundBesideAFaceScannedEightTimesMoreSparsely) {
 
 TEST(CreasePoints, FoundWhereBothFacesAreScannedAlike) {
   EXPECT_GE(edge_found(right_angle(20, 20, 0.025, 1)), 0.9);
+}
+
+// A curved crease: the bicone r = 10 − |z| (45° faces, the crease a circle of radius 10) sampled at random
+// without noise, 50 points per mm², within 2 mm of it. Planes fitted over 2 B of a cone are secants and
+// meet inside the crease; the profiles square to it do not. Where only one side had five regular points in
+// the profile's band, nothing was refined, and the crease points stood 0.0039 mm inside on average (95 %
+// within 0.0065 mm); with that side's plane standing in for its profile, 0.0016 (0.0041).
+TEST(CreasePoints, OnACurvedCreaseWhereOnlyOneSideHasAProfile) {
+  std::mt19937_64 random(5);
+  std::uniform_real_distribution<double> angle(0, 2 * std::numbers::pi), height(-2, 2);
+  std::vector<Vec3> kept;
+  while (kept.size() < 50 * 2 * 126 * 2) {  // both cones' bands, 2√2 mm wide each, round a 63 mm circle
+    const double a = angle(random), z = height(random), r = 10 - std::abs(z);
+    kept.emplace_back(r * std::cos(a), r * std::sin(a), z);
+  }
+  Points cloud(static_cast<Eigen::Index>(kept.size()), 3);
+  for (std::size_t i = 0; i < kept.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = kept[i].transpose();
+  const CloudIndex index(cloud);
+  const std::vector<LocalSurface> fits = fit_local_surfaces(cloud, index);
+  CreaseOptions options;
+  options.bin_mm = 0.35;
+  const Creases creases = find_creases(cloud, fits, index, options);
+  double sum = 0;
+  std::vector<double> off;
+  for (const CreasePoint& c : creases.points) {
+    const Vec3& x = c.position;
+    off.push_back((std::hypot(x.x(), x.y()) + std::abs(x.z()) - 10) / std::sqrt(2.0));
+    sum += off.back();
+  }
+  ASSERT_GT(off.size(), 150u);
+  std::sort(off.begin(), off.end(), [](double a, double b) { return std::abs(a) < std::abs(b); });
+  const double mean = sum / static_cast<double>(off.size()), p95 = std::abs(off[off.size() * 95 / 100]);
+  std::printf("%zu crease points: %.4f mm off the crease on average, 95 %% within %.4f mm\n", off.size(), mean, p95);
+  EXPECT_LT(std::abs(mean), 0.003);
+  EXPECT_LT(p95, 0.005);
 }
 
 }  // namespace
