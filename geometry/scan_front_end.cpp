@@ -12,6 +12,7 @@
 #include "geometry/cloud_index.hpp"
 #include "geometry/local_surface.hpp"
 #include "geometry/outlier_removal.hpp"
+#include "geometry/raw_edge.hpp"
 #include "geometry/region_growing.hpp"
 #include "geometry/scan_noise.hpp"
 #include "geometry/voxel_thinning.hpp"
@@ -177,6 +178,7 @@ ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanO
   growing.noise_sigma_mm = report.noise_sigma_mm;
   growing.cancel = options.cancel;
   Triangulation t = triangulate_scan(thinned, scan.points, fits, index, scan.normals, growing);
+  move_borders_to_raw_edge(t, scan.points, index, {report.bin_size_mm, report.noise_sigma_mm, options.tolerance_mm});
   clock.done("triangulation");
 
   report.triangles = static_cast<std::size_t>(t.mesh.faces.rows());
