@@ -294,7 +294,8 @@ TEST(CmmdAccess, StopGetsThroughFloodedDoorsOverTheDashboardTcpTheUnixSocketAndM
   }
   for (int i = 0; i < 256; ++i) slow_http.push_back(held_connection(cmmd.tcp_port(), "{\"jsonrpc\":"));  // and on TCP
 
-  // The flood is on: the station answers mallory's wrong tokens, throttled by now.
+  // The flood is on: the station answers mallory's wrong tokens, throttled by now (what proves the flood
+  // ran: how many were sent by the end depends on how fast the STOPs went, 100 at 200 a second in 0.5 s).
   const auto flood_start = Clock::now();
   while (flood_throttled < 20 && since(flood_start) < 30 * kSlowdown) unix_client.wait_notification(0.05);
   ASSERT_GE(flood_throttled.load(), 20) << "the MQTT flood never reached the station: " << flood_answered << " answered";
@@ -326,7 +327,6 @@ TEST(CmmdAccess, StopGetsThroughFloodedDoorsOverTheDashboardTcpTheUnixSocketAndM
               "%zu raw connections opened):\n",
               flood_sent.load(), flood_answered.load(), flood_throttled.load(), idle.size(), slow_http.size());
   for (const auto& [door, s] : latency_s) std::printf("  STOP over %-34s %.1f ms\n", door.c_str(), s * 1e3);
-  EXPECT_GT(flood_sent.load(), 100) << "the MQTT flood did not run";
 #if !defined(CMMD_SANITIZED) && defined(NDEBUG)  // a bound in the Release build only
   for (const auto& [door, s] : latency_s) EXPECT_LT(s, 1.0) << "STOP over " << door;
 #endif
