@@ -3,6 +3,7 @@
 #include "geometry/raw_edge.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -13,11 +14,42 @@ namespace cmm::geometry {
 namespace {
 
 constexpr int kMinStripPoints = 6;
+constexpr std::size_t kMinQuadricPoints = 12;  // six terms, twice over
 constexpr double kMaxFacetTurnDeg = 30;
 
 Vec3 facet_normal(const TriangleMesh& mesh, int f) {
   const Vec3 a = vertex(mesh, mesh.faces(f, 0)), b = vertex(mesh, mesh.faces(f, 1)), c = vertex(mesh, mesh.faces(f, 2));
   return (b - a).cross(c - a);
+}
+
+// κB², the most the surface bends over a bin near `at`: the quadric fitted to the raw points within 3 B
+// (and B + 3σ of the border's plane, so that a face curving away stays in). Noise hides no curvature here
+// as it would a plane's residual (at σ ε the case-3 block's Ø10 bores' walls, κ 0.2 /mm, passed for flat,
+// and their borders moved off the surface); over 2 B the quadric's own scatter under noise of ε/4 was as
+// large as the bound. Nothing where fewer than 12 points lie there.
+std::optional<double> bend_over_a_bin(const Points& raw, const CloudIndex& index, const Vec3& at, const Vec3& normal,
+                                      const Vec3& outward, const RawEdgeOptions& options) {
+  const double bin = options.bin_mm;
+  const Vec3 along = normal.cross(outward);
+  std::vector<Vec3> around;  // (out, along) in bins, up in mm
+  for (int id : index.within(at, 3 * bin)) {
+    const Vec3 d = raw.row(id).transpose() - at;
+    if (std::abs(d.dot(normal)) <= 3 * options.noise_sigma_mm + bin)
+      around.emplace_back(d.dot(outward) / bin, d.dot(along) / bin, d.dot(normal));
+  }
+  if (around.size() < kMinQuadricPoints) return std::nullopt;
+  Eigen::MatrixXd terms(static_cast<Eigen::Index>(around.size()), 6);
+  Eigen::VectorXd heights(static_cast<Eigen::Index>(around.size()));
+  for (std::size_t i = 0; i < around.size(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    const double u = around[i].x(), w = around[i].y();  // in bins: a well-conditioned fit
+    terms.row(r) << 1, u, w, u * u, u * w, w * w;
+    heights(r) = around[i].z();
+  }
+  const Eigen::VectorXd q = terms.colPivHouseholderQr().solve(heights);
+  Eigen::Matrix2d hessian;
+  hessian << 2 * q(3), q(4), q(4), 2 * q(5);  // d²h per bin²: κB² directly
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(hessian).eigenvalues().cwiseAbs().maxCoeff();
 }
 
 }  // namespace
@@ -51,15 +83,14 @@ std::optional<RawEdge> raw_edge(const Points& raw, const CloudIndex& index, cons
   // the last; at random the rank line's own scatter would carry a border off the surface).
   const double density = 1 / (-slope * 2 * bin);
   const double edge = std::min((ss - slope * sk) / count, strip.front().x() + 1 / std::sqrt(density));
-  // Only where the face is flat at the bin's scale (see the header): a height κa²/2 over a strip |a| ≤ B
-  // leaves about 0.15 κB² RMS about its plane, so κB² ≤ ε/4 there.
+  // Only where the face is flat at the bin's scale (see the header).
+  const std::optional<double> bend = bend_over_a_bin(raw, index, at, normal, outward, options);
+  if (!bend || *bend > options.tolerance_mm / 2) return std::nullopt;
   Vec3 centre = Vec3::Zero();
   for (std::size_t i = 0; i < n; ++i) centre += strip[i] / count;
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (std::size_t i = 0; i < n; ++i) scatter += (strip[i] - centre) * (strip[i] - centre).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> plane(scatter);
-  if (std::sqrt(std::max(0.0, plane.eigenvalues()(0)) / count) > 1.5 * options.noise_sigma_mm + options.tolerance_mm / 25)
-    return std::nullopt;
   const Vec3 m = plane.eigenvectors().col(0);
   if (!(std::abs(m.z()) > 0.5)) return std::nullopt;
   // On the plane at (edge, 0, up).

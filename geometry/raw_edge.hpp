@@ -26,9 +26,10 @@ struct RawEdgeOptions {
 // comes out half a row beyond the last; noise blurs the first few symmetrically about it) is followed
 // out to rank 0, but no farther than a sample spacing beyond the outermost point. `out` is that distance
 // from `at` along `outward`, `up` the height along `normal` of the strip's plane there. Nothing where
-// fewer than 6 points say it, or where the face is not flat at the bin's scale (the strip's points more
-// than 1.5σ + ε/25 RMS off their plane): a border moved a bin out lengthens its facets, whose sagitta on a
-// curved face then grows by about κB²/2, more than ε allows at the bicone's Ø6 end at ε 0.02 mm.
+// fewer than 6 points say it, or where the face is not flat at the bin's scale (the quadric fitted to the
+// points within 3 B bends by κ with κB² > ε/2): a border moved a bin out lengthens its facets, whose
+// sagitta on a curved face then grows by about κB²/2, more than ε allows at the bicone's Ø6 end at
+// ε 0.02 mm.
 struct RawEdge {
   double out = 0, up = 0;
 };
