@@ -36,9 +36,11 @@ struct RawEdge {
 std::optional<RawEdge> raw_edge(const Points& raw, const CloudIndex& index, const Vec3& at, const Vec3& normal,
                                 const Vec3& outward, const RawEdgeOptions& options);
 
-// Moves each border vertex of `t`'s loops (not a crease point, on one loop only) outward in its face's
-// plane onto the raw edge and the surface there, by at most B outward and never inward; a move that would turn one of its facets by
-// more than 30° is not made. Returns how many vertices moved.
+// Moves each border vertex of `t`'s hole loops (not a crease point, on one loop only) outward in its face's
+// plane onto the raw edge and the surface there, by at most B and never inward; a move that would turn one
+// of its facets by more than 30° is not made. The outer loops stay: a scan's outer border is mostly where a
+// face turns away from every view, seen at a grazing angle, where beam noise spills the points along the
+// face past its edge. Returns how many vertices moved.
 int move_borders_to_raw_edge(Triangulation& t, const Points& raw, const CloudIndex& index, const RawEdgeOptions& options);
 
 }  // namespace cmm::geometry
