@@ -22,17 +22,17 @@ Vec3 facet_normal(const TriangleMesh& mesh, int f) {
   return (b - a).cross(c - a);
 }
 
-// κB², the most the surface bends over a bin near `at`: the quadric fitted to the raw points within 3 B
+// κB², the most the surface bends over a bin near `at`: the quadric fitted to the raw points within 3 B (`within_3b`)
 // (and B + 3σ of the border's plane, so that a face curving away stays in). Noise hides no curvature here
 // as it would a plane's residual (at σ ε the case-3 block's Ø10 bores' walls, κ 0.2 /mm, passed for flat,
 // and their borders moved off the surface); over 2 B the quadric's own scatter under noise of ε/4 was as
 // large as the bound. Nothing where fewer than 12 points lie there.
-std::optional<double> bend_over_a_bin(const Points& raw, const CloudIndex& index, const Vec3& at, const Vec3& normal,
-                                      const Vec3& outward, const RawEdgeOptions& options) {
+std::optional<double> bend_over_a_bin(const Points& raw, const std::vector<int>& within_3b, const Vec3& at,
+                                      const Vec3& normal, const Vec3& outward, const RawEdgeOptions& options) {
   const double bin = options.bin_mm;
   const Vec3 along = normal.cross(outward);
   std::vector<Vec3> around;  // (out, along) in bins, up in mm
-  for (int id : index.within(at, 3 * bin)) {
+  for (int id : within_3b) {
     const Vec3 d = raw.row(id).transpose() - at;
     if (std::abs(d.dot(normal)) <= 3 * options.noise_sigma_mm + bin)
       around.emplace_back(d.dot(outward) / bin, d.dot(along) / bin, d.dot(normal));
@@ -59,8 +59,9 @@ std::optional<RawEdge> raw_edge(const Points& raw, const CloudIndex& index, cons
   const double bin = options.bin_mm;
   const Vec3 along = normal.cross(outward);
   const double height = 3 * options.noise_sigma_mm + 0.25 * bin;
+  const std::vector<int> within_3b = index.within(at, 3 * bin);
   std::vector<Vec3> strip;  // (out, along, up)
-  for (int id : index.within(at, 3 * bin)) {
+  for (int id : within_3b) {
     const Vec3 d = raw.row(id).transpose() - at;
     if (std::abs(d.dot(along)) <= bin && std::abs(d.dot(normal)) <= height) strip.emplace_back(d.dot(outward), d.dot(along), d.dot(normal));
   }
@@ -86,7 +87,7 @@ std::optional<RawEdge> raw_edge(const Points& raw, const CloudIndex& index, cons
   const double edge = std::min((ss - slope * sk) / count,
                                strip.front().x() + std::max(0.0, 1 / std::sqrt(density) - 2 * options.noise_sigma_mm));
   // Only where the face is flat at the bin's scale (see the header).
-  const std::optional<double> bend = bend_over_a_bin(raw, index, at, normal, outward, options);
+  const std::optional<double> bend = bend_over_a_bin(raw, within_3b, at, normal, outward, options);
   if (!bend || *bend > options.tolerance_mm / 2) return std::nullopt;
   Vec3 centre = Vec3::Zero();
   for (std::size_t i = 0; i < n; ++i) centre += strip[i] / count;
