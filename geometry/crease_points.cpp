@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <unordered_map>
 
 #include "geometry/point_grid.hpp"
@@ -120,6 +121,14 @@ std::pair<Vec3, double> farthest_normal(const std::vector<Vec3>& normals, const 
   return {best, best_cos};
 }
 
+// A face's trace in a section square to a crease: a line through `centre` along `along`. Its offset is
+// known to offset_variance + slope_variance·u² at u along it from the centre (both 0 for a plane's trace,
+// which is not fitted here).
+struct TraceLine {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero(), along = Eigen::Vector2d::UnitX();
+  double offset_variance = 0, slope_variance = 0;
+};
+
 struct Analysis {
   const Points& raw;
   const std::vector<LocalSurface>& fits;
@@ -218,24 +227,39 @@ struct Analysis {
       if (!one_sided(groups[k], p[k].normal, out.position, out.direction)) return {};
     out.sides = 2;
     out.normals = {p[0].normal, p[1].normal, p[1].normal};
-    refine_in_profile(out, groups);
+    refine_in_profile(out, face_points(out.position, p, 2 * reach));
+    return out;
+  }
+
+  // The raw points of each of the two faces near a crease point, regular or not: within the face's band
+  // about its plane, nearer to it than to the other plane and clear of the other plane's band (the points
+  // along the crease itself belong to neither). Near a crease most fits are irregular, and on a face
+  // scanned at a tenth of its neighbour's density all of them are: the regular points alone leave its
+  // profile too few points, and its secant plane stands.
+  std::array<std::vector<int>, 2> face_points(const Vec3& at, const Plane (&p)[2], double radius) const {
+    std::array<std::vector<int>, 2> out;
+    double clear[2];
+    for (int k = 0; k < 2; ++k) clear[k] = std::max(3 * p[k].rms, plane_floor) + 0.1 * bin;
+    for (int j : index.within(at, radius)) {
+      const Vec3 x = point(raw, j);
+      const double d[2] = {std::abs(p[0].normal.dot(x) - p[0].offset), std::abs(p[1].normal.dot(x) - p[1].offset)};
+      for (int k = 0; k < 2; ++k)
+        if (d[k] < d[1 - k] && d[1 - k] > clear[1 - k] && d[k] <= 2 * plane_tolerance) out[static_cast<std::size_t>(k)].push_back(j);
+    }
     return out;
   }
 
   // Planes fitted over 2 B of a curved face are secants that meet off the crease; in the cross-section
   // square to the crease each face is a nearly straight profile (a cone's generator exactly), so the
-  // two profiles' lines meet on it. A side with too few regular points in the section (the crease was
-  // looked for from the other side: on a bicone's rim half the time) keeps its plane's trace there, and
-  // the other side's profile still takes out its own secant's offset. The move is made only where it is
-  // more than twice the profiles' own standard error there: on flat faces under noise it is the noise
-  // (the case-3 block at σ 0.065 mm: a median of 0.05 mm), and the planes, fitted over more points, are
-  // the better estimate.
-  void refine_in_profile(LocalCrease& c, const std::vector<std::vector<int>>& groups) const {
+  // two profiles' lines meet on it. Each side's points are its raw points near the crease (face_points). A
+  // side with too few of them in the section band (a face scanned sparsely) is fitted bent along the
+  // crease instead, and one too sparse even for that keeps its plane's trace there, while the other side's
+  // profile still takes out its own secant's offset. The move is made only where it is more than twice
+  // the profiles' own standard error there: on flat faces under noise it is the noise (the case-3 block at
+  // σ 0.065 mm: a median of 0.05 mm), and the planes, fitted over more points, are the better estimate.
+  void refine_in_profile(LocalCrease& c, const std::array<std::vector<int>, 2>& groups) const {
     const Vec3 b1 = c.normals[0], b2 = c.direction.cross(b1);
-    struct Line {
-      Eigen::Vector2d centre = Eigen::Vector2d::Zero(), along = Eigen::Vector2d::UnitX();
-      double residual_variance = 0, spread = 1, count = 1;  // of a profile; a plane's trace has none
-    } line[2];
+    TraceLine line[2];
     int profiles = 0;
     for (int k = 0; k < 2; ++k) {
       std::vector<Eigen::Vector2d> profile;
@@ -244,6 +268,11 @@ struct Analysis {
         if (std::abs(d.dot(c.direction)) <= 0.25 * bin) profile.emplace_back(d.dot(b1), d.dot(b2));
       }
       if (profile.size() < 5) {
+        if (const std::optional<TraceLine> bent = bent_trace(c, groups[k], c.normals[k], b1, b2)) {
+          line[k] = *bent;
+          ++profiles;
+          continue;
+        }
         // The plane passes through the crease point; its trace runs square to its normal's projection.
         const Eigen::Vector2d n(c.normals[k].dot(b1), c.normals[k].dot(b2));
         line[k].along = Eigen::Vector2d(-n.y(), n.x()).normalized();
@@ -256,8 +285,8 @@ struct Analysis {
       Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
       for (const auto& q : profile) cov += (q - mean) * (q - mean).transpose();
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
-      line[k] = {mean, eig.eigenvectors().col(1), std::max(0.0, eig.eigenvalues()(0)) / (count - 2),
-                 std::max(eig.eigenvalues()(1), 1e-300), count};
+      const double residual_variance = std::max(0.0, eig.eigenvalues()(0)) / (count - 2);
+      line[k] = {mean, eig.eigenvectors().col(1), residual_variance / count, residual_variance / std::max(eig.eigenvalues()(1), 1e-300)};
     }
     // centre0 + s·along0 = centre1 + t·along1
     Eigen::Matrix2d m;
@@ -269,11 +298,50 @@ struct Analysis {
     // Each line's offset error where it meets the other (a fitted line's, at u from its centroid), carried
     // along the other line by 1/sin of their angle.
     double variance = 0;
-    for (const Line& l : line) {
+    for (const TraceLine& l : line) {
       const double u = (hit - l.centre).dot(l.along);
-      variance += l.residual_variance * (1 / l.count + u * u / l.spread) / (sine * sine);
+      variance += (l.offset_variance + l.slope_variance * u * u) / (sine * sine);
     }
     if (hit.norm() < 0.5 * bin && hit.norm() > 2 * std::sqrt(variance)) c.position += hit(0) * b1 + hit(1) * b2;
+  }
+
+  // A side too sparse for a profile in the section band (a bore's wall seen at a grazing angle) still
+  // has its points along the crease: fitted as its plane bent along the crease, w = a + e·t + b·s + c·s²
+  // (w off the plane, t across it from the points' mean, s along the crease), its trace in the section
+  // (s = 0) is the line w = a + e·t. A plane through an arc of a wall is a secant, off by r θ²/6 (0.17 mm
+  // on a Ø10 bore's wall over 3 B at B 0.74 mm) and leaning, as the arc's shallow points reach farther
+  // along it; the bent fit has neither. Needs 8 points on both sides of the section; nothing when the
+  // trace turns more than 15° from the plane's (then it is no gentle bend). Its variances are the fit's.
+  std::optional<TraceLine> bent_trace(const LocalCrease& c, const std::vector<int>& group, const Vec3& normal,
+                                      const Vec3& b1, const Vec3& b2) const {
+    if (group.size() < 8) return std::nullopt;
+    const Vec3 across = c.direction.cross(normal).normalized();
+    const auto n = static_cast<Eigen::Index>(group.size());
+    Eigen::MatrixXd a(n, 4);
+    Eigen::VectorXd w(n);
+    double t_mean = 0;
+    int before = 0, after = 0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Vec3 d = point(raw, group[static_cast<std::size_t>(i)]) - c.position;
+      const double along = d.dot(c.direction);
+      a.row(i) << 1, d.dot(across), along, along * along;
+      w(i) = d.dot(normal);
+      t_mean += d.dot(across) / static_cast<double>(n);
+      before += along < -0.5 * bin, after += along > 0.5 * bin;
+    }
+    if (before < 2 || after < 2) return std::nullopt;
+    a.col(1).array() -= t_mean;
+    const Eigen::Matrix4d normal_matrix = a.transpose() * a;
+    const Eigen::FullPivLU<Eigen::Matrix4d> lu(normal_matrix);
+    if (!lu.isInvertible()) return std::nullopt;
+    const Eigen::Vector4d x = lu.solve(a.transpose() * w);
+    if (std::abs(x(1)) > std::tan(15 * std::numbers::pi / 180)) return std::nullopt;
+    const Eigen::Matrix4d covariance = (a * x - w).squaredNorm() / static_cast<double>(n - 4) * lu.inverse();
+    const Eigen::Vector2d n2(normal.dot(b1), normal.dot(b2)), t2(across.dot(b1), across.dot(b2));
+    const double length = std::sqrt(1 + x(1) * x(1));
+    // Offsets measured along n2; the line's own normal is 1/length of that, and u along it is t·length.
+    return TraceLine{x(0) * n2 + t_mean * (t2 + x(1) * n2), (t2 + x(1) * n2) / length, covariance(0, 0) / (length * length),
+                     covariance(1, 1) / std::pow(length, 4)};
   }
 
   LocalCrease corner(const Vec3& x0, const std::vector<std::vector<int>>& groups) const {
@@ -313,7 +381,39 @@ struct Analysis {
     double widest = 0;
     for (int j : index.within(x0, 3 * bin)) widest = std::max(widest, fits[j].radius_mm);
     const double reach = std::min(1.5 * widest, 6 * bin);
-    return reach > 3 * bin ? look(x0, reach, 40) : c;
+    if (reach > 3 * bin && (c = look(x0, reach, 40)).sides != 0) return c;
+    for (double r : {2.0, 3.0}) {
+      c = look_beside_a_flat_face(x0, r * bin);
+      if (c.sides != 0) return c;
+    }
+    return c;
+  }
+
+  // A face sampled far more sparsely than the face it meets (a bore's wall seen at a grazing angle
+  // from the scanner's rows, a tenth of the top's density) has no regular fits near the crease: its
+  // points' neighbourhoods reach onto the dense face, and within 3 B too few of them are regular to be a
+  // group, while wider looks take in the wall's turn. Its raw points are there all the same: where the
+  // regular points around are one flat face, the raw points that lie well off that face, all to one side
+  // of it, are the other face if they are a plane themselves.
+  LocalCrease look_beside_a_flat_face(const Vec3& x0, double radius) const {
+    std::vector<int> regular;
+    const std::vector<int> near = index.within(x0, radius);
+    for (int j : near)
+      if (fits[j].regular) regular.push_back(j);
+    if (regular.size() < 12) return {};
+    const Plane face = robust_plane(raw, regular, plane_floor);
+    if (face.rms > plane_tolerance || face.inliers < 0.8) return {};
+    const double off = std::max(3 * face.rms, plane_floor) + 0.1 * bin;
+    std::vector<int> above, below, on;
+    for (int j : near) {
+      const double d = face.normal.dot(point(raw, j)) - face.offset;
+      (d > off ? above : d < -off ? below : on).push_back(j);
+    }
+    std::vector<int>& other = above.size() >= below.size() ? above : below;
+    const std::size_t stray = std::min(above.size(), below.size());
+    if (other.size() < 6 || 10 * stray > other.size()) return {};
+    std::erase_if(on, [&](int j) { return !fits[j].regular; });
+    return crease(x0, {on, other}, std::max(1.5 * bin, radius / 2));
   }
 
   // `share`: each face holds at least 1/share of the regular points there.
