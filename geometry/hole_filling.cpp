@@ -906,9 +906,15 @@ HoleFilling fill_false_holes(TriangleMesh& mesh, const Points& raw, const CloudI
     std::vector<std::vector<int>> recut;
     for (const auto& cycle : filler.failed_) {
       double perimeter = 0;
-      for (std::size_t i = 0; i < cycle.size(); ++i)
+      Vec3 middle = Vec3::Zero();
+      for (std::size_t i = 0; i < cycle.size(); ++i) {
         perimeter += (vertex(mesh, cycle[(i + 1) % cycle.size()]) - vertex(mesh, cycle[i])).norm();
-      if (round + 1 < options.rounds || perimeter <= options.small_loop_bins * options.bin_mm) recut.push_back(cycle);
+        middle += vertex(mesh, cycle[i]) / static_cast<double>(cycle.size());
+      }
+      const bool small = perimeter <= options.small_loop_bins * options.bin_mm;
+      const bool pinhole = perimeter <= options.pinhole_loop_bins * options.bin_mm &&
+                           !raw_index.within(middle, options.max_gap_bins * options.bin_mm).empty();
+      if (round + 1 < options.rounds || small || pinhole) recut.push_back(cycle);
     }
     if (recut.empty() || round + 1 >= options.rounds + options.small_loop_rounds) break;
     // A loop no patch closes has a ragged rim (facets folded by the noise, a sliver fan): its vertices'

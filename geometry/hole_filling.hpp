@@ -22,9 +22,12 @@ struct HoleFillingOptions {
   // than one closes more loops on the case-3 scan (22 left instead of 52) but the wider patches misplace
   // edges by up to 0.14 mm, so one is the default.
   int rounds = 1;
-  // Then this many more rounds for the failed loops no longer than small_loop_bins·B alone.
+  // Then this many more rounds for the failed loops no longer than small_loop_bins·B alone, or no longer
+  // than pinhole_loop_bins·B with raw points at their middle (nearer than max_gap_bins·B): a tangle at a
+  // small rim (a slot's end at 3 B), where the mouth of an opening is empty across its whole width.
   int small_loop_rounds = 2;
   double small_loop_bins = 10;
+  double pinhole_loop_bins = 30;
 };
 
 struct HoleFilling {
