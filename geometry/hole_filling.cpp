@@ -37,6 +37,8 @@ constexpr double kMaxPatchFold = 160 * std::numbers::pi / 180;  // folding onto 
 // crease, 0.29 over the end of the plate's slot (its wall a half circle of 3 B: the normals fan out),
 // below 0 for an outline's (a second sheet over the surface).
 constexpr double kMinPatchFacing = 0.15;
+// The cosine each facet of a least-folding patch must reach with some facet of its rim.
+constexpr double kMinFacetFacing = 0.5;
 // How much more a refined least-folding patch may fold than its triangulation did before its new
 // vertices were put onto the raw surface (noise on a flat patch tilts facets by a few degrees).
 constexpr double kPatchRefineFold = 30 * std::numbers::pi / 180;
@@ -88,10 +90,23 @@ std::vector<std::vector<int>> simple_cycles(const std::vector<int>& loop) {
   return out;
 }
 
+// A loop no patch closed whose rim facets are cut back for another round: a short one (a folded pinhole
+// rim), or one up to pinhole_loop_bins with raw points at its middle (a tangle where a rim curves at a few
+// bins or two views' sheets meet; an opening's mouth is empty across its whole width).
+bool recut(const std::vector<Vec3>& loop, double perimeter, const CloudIndex& raw_index, const HoleFillingOptions& options) {
+  if (perimeter <= options.small_loop_bins * options.bin_mm) return true;
+  if (perimeter > options.pinhole_loop_bins * options.bin_mm || loop.empty()) return false;
+  Vec3 middle = Vec3::Zero();
+  for (const Vec3& p : loop) middle += p / static_cast<double>(loop.size());
+  return !raw_index.within(middle, options.max_gap_bins * options.bin_mm).empty();
+}
+
 class Filler {
  public:
-  Filler(TriangleMesh& mesh, const Points& raw, const CloudIndex& raw_index, const HoleFillingOptions& options)
-      : mesh_(mesh), raw_(raw), index_(raw_index), options_(options), bin_(options.bin_mm), old_vertices_(static_cast<int>(mesh.vertices.rows())) {
+  // `last_round`: no loop is cut back after this round.
+  Filler(TriangleMesh& mesh, const Points& raw, const CloudIndex& raw_index, const HoleFillingOptions& options, bool last_round)
+      : mesh_(mesh), raw_(raw), index_(raw_index), options_(options), bin_(options.bin_mm), old_vertices_(static_cast<int>(mesh.vertices.rows())),
+        last_round_(last_round) {
     const EdgeAdjacency adjacency = edge_adjacency(mesh);
     for (Eigen::Index e = 0; e < adjacency.edges.rows(); ++e) edges_.insert(edge_key(adjacency.edges(e, 0), adjacency.edges(e, 1)));
     normals_.assign(static_cast<std::size_t>(mesh.vertices.rows()), Vec3::Zero());
@@ -556,6 +571,23 @@ class Filler {
       say(cycle, perimeter, "least folding patch folds or faces away (deg)", patch->max_dihedral_rad * 180 / std::numbers::pi);
       return false;
     }
+    // Each facet lies in one of the faces the loop joins or between them, so it faces within 60° of some
+    // rim facet; one that faces away from all of them is a flap folded under a crease (on the plate's top
+    // front edge of a random scan at σ ε/2, facets facing down on the top: "too few faces" on the edge).
+    // Refused while the loop will be cut back and tried wider; otherwise a flap is better than a pinhole.
+    double worst_facet = 1;
+    for (const auto& t : patch->triangles) {
+      const Vec3& a = x[static_cast<std::size_t>(t[0])];
+      const Vec3 facet = (x[static_cast<std::size_t>(t[1])] - a).cross(x[static_cast<std::size_t>(t[2])] - a);
+      if (!(facet.norm() > 0)) continue;
+      double best = -1;
+      for (const Vec3& r : rim) best = std::max(best, r.dot(facet.normalized()));
+      worst_facet = std::min(worst_facet, best);
+    }
+    if (worst_facet < kMinFacetFacing && !last_round_ && recut(x, perimeter, index_, options_)) {
+      say(cycle, perimeter, "least folding patch has a facet facing away from its rim (cos)", worst_facet);
+      return false;
+    }
     std::vector<Vec3> points;
     // Beside a crease the line along the patch's normal meets the other face too: a vertex moves at most
     // B/2, else stays put (a far move would lengthen the edges it was to shorten).
@@ -879,6 +911,7 @@ class Filler {
   const HoleFillingOptions& options_;
   double bin_;
   int old_vertices_;
+  bool last_round_ = false;
   bool dump_ = false;
   std::unordered_set<std::uint64_t> edges_;
   std::unordered_map<std::uint64_t, Vec3> rim_normals_;  // by the loop side's directed key
@@ -896,31 +929,29 @@ HoleFilling fill_false_holes(TriangleMesh& mesh, const Points& raw, const CloudI
   if (mesh.faces.rows() == 0 || raw.rows() == 0 || !(options.bin_mm > 0) || !std::isfinite(options.bin_mm)) return out;
   // Rounds past options.rounds recut only the small failed loops: a pinhole of a few facets whose rim
   // folds (no fresh diagonal, a slit) is no crease to misplace.
-  for (int round = 0; round < options.rounds + options.small_loop_rounds; ++round) {
-    Filler filler(mesh, raw, raw_index, options);
+  const int rounds = options.rounds + options.small_loop_rounds;
+  for (int round = 0; round < rounds; ++round) {
+    Filler filler(mesh, raw, raw_index, options, round + 1 >= rounds);
     const HoleFilling r = filler.run();
     out.loops_examined += r.loops_examined;
     out.loops_filled += r.loops_filled;
     out.faces_added += r.faces_added;
     out.vertices_added += r.vertices_added;
-    std::vector<std::vector<int>> recut;
+    std::vector<std::vector<int>> cut;
     for (const auto& cycle : filler.failed_) {
       double perimeter = 0;
-      Vec3 middle = Vec3::Zero();
+      std::vector<Vec3> loop;
       for (std::size_t i = 0; i < cycle.size(); ++i) {
         perimeter += (vertex(mesh, cycle[(i + 1) % cycle.size()]) - vertex(mesh, cycle[i])).norm();
-        middle += vertex(mesh, cycle[i]) / static_cast<double>(cycle.size());
+        loop.push_back(vertex(mesh, cycle[i]));
       }
-      const bool small = perimeter <= options.small_loop_bins * options.bin_mm;
-      const bool pinhole = perimeter <= options.pinhole_loop_bins * options.bin_mm &&
-                           !raw_index.within(middle, options.max_gap_bins * options.bin_mm).empty();
-      if (round + 1 < options.rounds || small || pinhole) recut.push_back(cycle);
+      if (round + 1 < options.rounds || recut(loop, perimeter, raw_index, options)) cut.push_back(cycle);
     }
-    if (recut.empty() || round + 1 >= options.rounds + options.small_loop_rounds) break;
+    if (cut.empty() || round + 1 >= rounds) break;
     // A loop no patch closes has a ragged rim (facets folded by the noise, a sliver fan): its vertices'
     // facets go, and the next round fills the wider, cleaner loop. Their vertices may be left unused.
     std::unordered_set<int> rim;
-    for (const auto& cycle : recut) rim.insert(cycle.begin(), cycle.end());
+    for (const auto& cycle : cut) rim.insert(cycle.begin(), cycle.end());
     Triangles kept(mesh.faces.rows(), 3);
     Eigen::Index count = 0;
     for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
