@@ -15,6 +15,7 @@
 #include "planner/plan_compensation.hpp"
 #include "sim/raw_scan.hpp"
 #include "sim/scan_borders.hpp"
+#include "tests/sim/matrix_scan_options.hpp"
 #include "true_part_touches.hpp"
 
 namespace cmm {
@@ -226,15 +227,7 @@ TEST(RawScanMesh, PlateGridScanWithoutNoiseHasNoPatchFoldedOverItsRims) {
 // faces away from every facet of its rim is now refused while the loop can be cut back and tried wider.
 TEST(RawScanMesh, NoFlapFoldedUnderTheTopEdgeOfARandomScan) {
   const geometry::AnalyticPart part = geometry::make_plate_small_openings(0.25);
-  sim::RawScanOptions options;
-  options.spacing_mm = 0.25;
-  options.noise_sigma_mm = 0.05;
-  options.stray_fraction = 0.005;
-  options.seed = 1;
-  options.views = sim::views_with_offset(5, 0.02, 1);
-  options.sampling = sim::ScanSampling::random;
-  options.noise_model = sim::ScanNoise::isotropic;
-  const geometry::PointCloud cloud = sim::synthesize_raw_scan(part.mesh, options).cloud;
+  const geometry::PointCloud cloud = sim::synthesize_raw_scan(part.mesh, testing::matrix_random_scan(0.05, 1, false)).cloud;
   std::vector<Eigen::Index> near;
   for (Eigen::Index i = 0; i < cloud.points.rows(); ++i)
     if (cloud.points(i, 0) > 60 && cloud.points(i, 0) < 80 && cloud.points(i, 1) < 12) near.push_back(i);

@@ -20,7 +20,7 @@
 #include "geometry/edge_adjacency.hpp"
 #include "geometry/scan_front_end.hpp"
 #include "sim/raw_scan.hpp"
-#include "sim/scan_views.hpp"
+#include "tests/sim/matrix_scan_options.hpp"
 
 namespace cmm {
 namespace {
@@ -41,19 +41,7 @@ struct Mouths {
 // The scan near the two openings only (within 5 mm of their outlines), meshed at ε 0.1 mm.
 Mouths vertices_over_mouths(bool partial_views, std::uint64_t seed) {
   const geometry::TriangleMesh scene = geometry::make_plate_small_openings(0.25).mesh;
-  sim::RawScanOptions options;
-  options.spacing_mm = 0.25;
-  options.noise_sigma_mm = 0;
-  options.stray_fraction = 0.005;
-  options.seed = seed;
-  options.views = sim::views_with_offset(5, 0.02, seed);
-  options.sampling = sim::ScanSampling::random;
-  options.noise_model = sim::ScanNoise::isotropic;
-  if (partial_views) {
-    options.view_coverage = 0.8;
-    options.view_density = {1.0, 0.4, 2.0, 0.7, 1.5};
-  }
-  const sim::RawScan raw = sim::synthesize_raw_scan(scene, options);
+  const sim::RawScan raw = sim::synthesize_raw_scan(scene, testing::matrix_random_scan(0, seed, partial_views));
   geometry::PointCloud near;
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < raw.cloud.points.rows(); ++i)
@@ -99,18 +87,10 @@ int winding(const geometry::TriangleMesh& mesh, const std::vector<int>& loop, do
 // back too (an opening's mouth is empty across its width), and the next round closes it.
 TEST(RawScanSmallOpenings, NoPinholeInPartialViewsOfTheWholePlate) {
   const geometry::AnalyticPart part = geometry::make_plate_small_openings(0.25);
-  sim::RawScanOptions options;
-  options.spacing_mm = 0.25;
-  options.stray_fraction = 0.005;
-  options.seed = 2;
-  options.views = sim::views_with_offset(5, 0.02, 2);
-  options.sampling = sim::ScanSampling::random;
-  options.noise_model = sim::ScanNoise::isotropic;
-  options.view_coverage = 0.8;
-  options.view_density = {1.0, 0.4, 2.0, 0.7, 1.5};
   geometry::ScanOptions front;
   front.tolerance_mm = 0.1;
-  const geometry::ScanMesh meshed = geometry::mesh_scan(sim::synthesize_raw_scan(part.mesh, options).cloud, "plate, partial views", front);
+  const geometry::ScanMesh meshed =
+      geometry::mesh_scan(sim::synthesize_raw_scan(part.mesh, testing::matrix_random_scan(0, 2, true)).cloud, "plate, partial views", front);
   std::vector<geometry::Vec3> openings{{40, 10, 0}};  // the slot's middle, then the round holes' centres
   for (const geometry::TrueHole& h : part.holes) openings.push_back(h.centre);
   int pinholes = 0;
