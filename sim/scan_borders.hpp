@@ -25,6 +25,13 @@ struct ScanBorder {
   // (docs/scan.md, "Gap or opening") and has no piece for a seen speck narrower than a bin or two.
   double unseen_half_width_mm = 0;
   double seen_half_width_mm = 0;
+  // A hole border's mouth: the radius of the widest disc inside the loop seen down `mouth_axis` (a
+  // bore's or slot's axis, across the normals of the seen wall along the border; the face's normal round
+  // a pinhole; its sign arbitrary). Through a hole the unseen region runs on down the walls and over the
+  // underside, but what the scan shows is a void as wide as the mouth (a Ø3 hole's 1.5 mm, a 2 mm slot's
+  // 1 mm). 0 for outer borders and for a loop that does not go round its axis.
+  double mouth_half_width_mm = 0;
+  geometry::Vec3 mouth_axis = geometry::Vec3::Zero();
 };
 
 // A face counts as seen when some view sees its centroid (within the view's coverage band, when given:

@@ -68,6 +68,31 @@ TEST(ScanBorders, PlateSmallOpeningsHasABorderPerOpening) {
   EXPECT_EQ(small_hole, 1);
 }
 
+// What the scan shows of an opening is its mouth, however far the unseen region runs on through it: the
+// slot's is 1 mm in half-width and the Ø3 hole's 1.5 mm, seen down z, though their borders run down
+// the walls at varying depth (a loop's vector area tilts 25° there).
+TEST(ScanBorders, AnOpeningsMouthIsAsWideAsTheOpening) {
+  const auto part = geometry::make_analytic_part("plate_small_openings", 0.5);
+  int checked = 0;
+  for (const ScanBorder& b : scan_borders(part.mesh, default_views())) {
+    if (b.kind == geometry::LoopKind::outer) {
+      EXPECT_EQ(b.mouth_half_width_mm, 0);
+      continue;
+    }
+    EXPECT_NEAR(std::abs(b.mouth_axis.z()), 1, 1e-3);
+    EXPECT_GT(b.unseen_half_width_mm, 5);  // down the walls and over the underside
+    if (std::abs(b.centre.x() - 40) < 1 && std::abs(b.centre.y() - 10) < 1) {
+      EXPECT_NEAR(b.mouth_half_width_mm, 1.0, 0.03);
+      ++checked;
+    }
+    if (std::hypot(b.centre.x() - 10, b.centre.y() - 70) < 1) {
+      EXPECT_NEAR(b.mouth_half_width_mm, 1.5, 0.03);  // a 20-gon's inscribed circle: 1.48
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 2);
+}
+
 // A partial view's border runs along its band's edge: from above, half the cube's top face.
 TEST(ScanBorders, CoverageBandsCutTheSeenRegion) {
   const auto part = geometry::make_analytic_part("cube", 2.0);

@@ -126,6 +126,13 @@ geometry::Points densified(const std::vector<Vec3>& corners, double step) {
   return p;
 }
 
+// Points projected down a hole border's axis onto the plane through its centre.
+std::vector<Vec3> flattened(const std::vector<Vec3>& points, const sim::ScanBorder& border) {
+  std::vector<Vec3> out;
+  for (const Vec3& p : points) out.push_back(p - (p - border.centre).dot(border.mouth_axis) * border.mouth_axis);
+  return out;
+}
+
 // The share of closed polyline a's length that lies within `reach` of closed polyline b.
 double share_within(const std::vector<Vec3>& a, const std::vector<Vec3>& b, double reach) {
   if (a.empty() || b.empty()) return 0;
@@ -174,24 +181,36 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
   const geometry::FeatureModel& model = reference.features;
   out.bin_mm = reference.inputs.scan ? reference.inputs.scan->bin_size_mm : 0;
 
-  // What the gap rule (docs/scan.md, "Gap or opening") asks of each border: an unseen region no more
-  // than 1.5 B across from its middle to the seen surface is a gap the mesh closes (a loop there is a
-  // pinhole); one more than 3 B is an opening that stays open; between, the local density decides (r*)
-  // and either is right. A seen speck less than a bin across is no surface a mesh can keep.
+  // What the gap rule (docs/scan.md, "Gap or opening") asks of each border: a void no more than 1.5 B
+  // across from its middle to the seen surface is a gap the mesh closes (a loop there is a pinhole); one
+  // more than 3 B is an opening that stays open; between, the local density decides (r*) and either is
+  // right. A hole's void is its unseen region or its mouth, whichever is narrower (through a Ø3 hole the
+  // unseen walls and underside run on, but the scan shows a void 1.5 mm wide). A seen speck less than a
+  // bin across is no surface a mesh can keep.
   const double bin = out.bin_mm;
   const auto expected = [&](const sim::ScanBorder& b) {
     if (b.kind == geometry::LoopKind::outer) return b.seen_half_width_mm >= bin ? Expect::open : Expect::either;
-    if (b.unseen_half_width_mm <= 1.5 * bin) return Expect::closed;
-    return b.unseen_half_width_mm > 3 * bin ? Expect::open : Expect::either;
+    const double void_half_width = b.mouth_half_width_mm > 0 ? std::min(b.unseen_half_width_mm, b.mouth_half_width_mm) : b.unseen_half_width_mm;
+    if (void_half_width <= 1.5 * bin) return Expect::closed;
+    return void_half_width > 3 * bin ? Expect::open : Expect::either;
   };
   // Loops against the borders, one each, of the same kind: a loop is a border's when it runs along it —
   // 90 % of the border's length within 3 B of the loop (the gap rule's reach: the mesh need not follow
   // the border closer than a void it may leave) and half of the loop's within 3 B of the border (the rest
-  // a ragged edge: notches of a sparsely seen face's fringe, reported as "off border").
+  // a ragged edge: notches of a sparsely seen face's fringe, reported as "off border"). Seen down its
+  // axis when a hole's mouth is no more than 3 B in radius: its wall is a tube a bin-B mesh cannot bend
+  // round, so the loop may lie on its rim where the border runs down the unmeshed wall.
   out.borders = static_cast<std::size_t>(std::count_if(borders.begin(), borders.end(), [&](const sim::ScanBorder& b) { return expected(b) == Expect::open; }));
   out.loops = model.loops.size();
   out.non_manifold = model.topology.non_manifold_edges;
   const double reach = 3 * bin;
+  // How much of border b runs within reach of the loop, and of the loop within reach of b.
+  const auto along = [&](const sim::ScanBorder& b, const std::vector<Vec3>& corners) {
+    const bool narrow = b.mouth_half_width_mm > 0 && b.mouth_half_width_mm <= reach;
+    const std::vector<Vec3> border = narrow ? flattened(b.points, b) : b.points;
+    const std::vector<Vec3> loop = narrow ? flattened(corners, b) : corners;
+    return std::make_pair(share_within(border, loop, reach), share_within(loop, border, reach));
+  };
   std::vector<bool> matched(borders.size(), false);
   for (const geometry::BoundaryLoop& loop : model.loops) {
     std::vector<Vec3> corners;
@@ -200,7 +219,7 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
     double best_score = 0, best_own = 0;
     for (std::size_t b = 0; b < borders.size(); ++b) {
       if (matched[b] || borders[b].kind != loop.kind) continue;
-      const double cover = share_within(borders[b].points, corners, reach), own = share_within(corners, borders[b].points, reach);
+      const auto [cover, own] = along(borders[b], corners);
       if (cover >= 0.9 && own >= 0.5 && cover + own > best_score) best = static_cast<int>(b), best_score = cover + own, best_own = own;
     }
     if (best < 0 || expected(borders[static_cast<std::size_t>(best)]) == Expect::closed) {
@@ -214,8 +233,8 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
   if (std::getenv("SCAN_MATRIX_VERBOSE")) {
     const auto kind = [](geometry::LoopKind k) { return k == geometry::LoopKind::hole ? "hole" : "outer"; };
     for (std::size_t b = 0; b < borders.size(); ++b)
-      std::printf("border %s %.1f mm, half wide %.2f mm seen, %.2f unseen, at (%.2f %.2f %.2f), %s%s\n", kind(borders[b].kind),
-                  borders[b].perimeter_mm, borders[b].seen_half_width_mm, borders[b].unseen_half_width_mm, borders[b].centre.x(),
+      std::printf("border %s %.1f mm, half wide %.2f mm seen, %.2f unseen, mouth %.2f, at (%.2f %.2f %.2f), %s%s\n", kind(borders[b].kind),
+                  borders[b].perimeter_mm, borders[b].seen_half_width_mm, borders[b].unseen_half_width_mm, borders[b].mouth_half_width_mm, borders[b].centre.x(),
                   borders[b].centre.y(), borders[b].centre.z(), to_string(expected(borders[b])), matched[b] ? "" : ": no loop");
     for (const geometry::BoundaryLoop& loop : model.loops) {
       const Vec3 centre = geometry::loop_centre(reference.mesh, loop.vertices);
@@ -223,7 +242,7 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
       std::vector<Vec3> corners;
       for (int v : loop.vertices) corners.push_back(geometry::vertex(reference.mesh, v));
       for (std::size_t b = 0; b < borders.size(); ++b) {
-        const double cover = share_within(borders[b].points, corners, reach), own = share_within(corners, borders[b].points, reach);
+        const auto [cover, own] = along(borders[b], corners);
         if (cover > 0.2 || own > 0.2) std::printf("; along border %zu: %.0f %% of it, %.0f %% of the loop", b, 100 * cover, 100 * own);
       }
       std::printf("\n");
@@ -232,8 +251,17 @@ Outcome run(const Case& c, double spacing, double eps, double offset_mm, double 
       std::printf("hole %s r %.3f at (%.3f %.3f %.3f)\n", geometry::to_string(h.source), h.radius, h.centre.x(), h.centre.y(), h.centre.z());
   }
 
-  // Through holes: a hole of the plan on the same axis line (within 0.2 mm) with the radius within 2 %.
+  // Through holes: a hole of the plan on the same axis line (within 0.2 mm) with the radius within 2 %;
+  // not asked of a hole whose borders the gap rule lets the mesh close (a Ø3 hole at B 0.7 mm).
   for (const geometry::TrueHole& truth : part.holes) {
+    bool bordered = false, open = false;
+    for (const sim::ScanBorder& b : borders) {
+      const Vec3 off = b.centre - truth.centre;
+      if (b.kind != geometry::LoopKind::hole || (off - off.dot(truth.axis) * truth.axis).norm() > truth.radius) continue;
+      bordered = true;
+      open = open || expected(b) == Expect::open;
+    }
+    if (bordered && !open) continue;
     ++out.holes_true;
     double best_centre = 1e300, best_radius = 1e300;
     for (const geometry::Hole& h : model.holes) {
