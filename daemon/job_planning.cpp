@@ -7,7 +7,8 @@
 namespace cmm::daemon {
 
 ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
-                                    const description::TravelBox& travel_box, const geometry::CancelCheck& cancel) {
+                                    const description::TravelBox& travel_box, const geometry::CancelCheck& cancel,
+                                    bool made_from_scan) {
   planner::ReferenceModelOptions options;
   options.scale = request.scale;
   options.spacing = request.spacing_mm;
@@ -17,6 +18,7 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const Job
   options.scan.bin_size_mm = request.bin_size_mm;
   options.scan.adaptive = request.adaptive;
   options.scan.cancel = cancel;
+  options.made_from_scan = made_from_scan;
   try {
     ReferenceModel m = planner::load_reference_model(file, travel_box, options);
     planner::settle_delta(m.inputs, request.delta_mm, "job request (or cmmd.json's job.delta_mm)", m.features);

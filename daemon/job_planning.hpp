@@ -24,9 +24,10 @@ using planner::ReferenceModel;
 // planner::load_reference_model with the request's scale, spacing, angle and scan options (and its δ
 // recorded for the plan): a ModelError becomes RpcError model_error, data {"file", "kind"} (and
 // "points", "limit" for too many points); geometry::Cancelled when `cancel` asks, in the scan front
-// end too.
+// end too. `made_from_scan`: the file is a mesh the scan front end made (a job's stored reference.ply).
 ReferenceModel load_reference_model(const std::filesystem::path& file, const JobRequest& request,
-                                    const description::TravelBox& travel_box, const geometry::CancelCheck& cancel = {});
+                                    const description::TravelBox& travel_box, const geometry::CancelCheck& cancel = {},
+                                    bool made_from_scan = false);
 
 // The description the plan is made for: the configured one (which knows the styli's shafts), with
 // the tips' radii, offsets and qualifications and the active tip as the machine reports them (a job

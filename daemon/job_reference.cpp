@@ -61,7 +61,10 @@ JobReference stored_reference(JobStore& store, int job_id, const JobRequest& req
   as_stored.tolerance_mm.reset();
   as_stored.bin_size_mm.reset();
   as_stored.adaptive = false;
-  ReferenceModel model = load_reference_model(mesh_file, as_stored, travel_box, cancel);
+  // A scan's mesh keeps its features as they were first taken (a scan's mesh is noisy by construction).
+  const auto scan = info.find("scan");
+  const bool from_scan = scan != info.end() && scan->is_object();
+  ReferenceModel model = load_reference_model(mesh_file, as_stored, travel_box, cancel, from_scan);
   model.inputs.notes.push_back("planned on the job's stored reference mesh " + mesh_file.string() + ", made from " +
                                request.model + " when the job first planned (reference.json); the model file is not read again");
   info["planned_on"] = "stored_mesh";

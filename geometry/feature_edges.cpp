@@ -177,8 +177,9 @@ FeatureEdges feature_edges(const TriangleMesh& mesh, const EdgeAdjacency& adjace
   result.mean_edge_length = sampled ? length_sum / sampled : 0;
   const double threshold = options.angle_deg * std::numbers::pi / 180;
   result.noise = surface_noise(mesh, adjacency, faces, threshold);
-  result.noisy = result.mean_edge_length > 0 &&
-                 2 * result.noise.sigma_mm / result.mean_edge_length > options.noisy_facet_tilt_deg * std::numbers::pi / 180;
+  result.noisy = options.made_from_scan ||
+                 (result.mean_edge_length > 0 &&
+                  2 * result.noise.sigma_mm / result.mean_edge_length > options.noisy_facet_tilt_deg * std::numbers::pi / 180);
 
   const Points* normals = &faces.normals;
   if (result.noisy) {

@@ -23,6 +23,13 @@ struct FeatureOptions {
   // 1 mm edges tilts them by 11°, 10 µm on 0.2 mm edges by 6°; a decimated mesh's 7 µm on 3 mm edges
   // by 0.3°, and an exact mesh's less than 1 µm not at all, however coarse or thin its triangles.
   double noisy_facet_tilt_deg = 1.0;
+  // A mesh the scan front end made is noisy whatever its vertex scatter: its vertices sit on quadrics
+  // fitted to noisy neighbourhoods (smooth together, they lean together where a face is sparse) and the
+  // facets beside a crease lean with the crease's estimate, so a single facet there says little of its
+  // side. (Taken from the scatter, the plate's Poisson-disk scan without noise was clean and its plan
+  // called 24 rim points concave, 91 % probeable, 97.5 % as noisy; the case-3 block's grid scan at 100k
+  // points, σ 0.05 mm, 30 on its back edges, 73 % probeable, 82 % as noisy.)
+  bool made_from_scan = false;
   // Curves that end in nothing (or, on a noisy mesh, close on themselves) and are shorter than this
   // many mean edge lengths are dropped: on a clean mesh they are the spokes of a coarsely tessellated
   // cone apex, on a noisy one specks and spurs of noise. A true crease ending in a smooth blend is

@@ -77,6 +77,7 @@ ReferenceModel load_reference_model(const std::filesystem::path& file, const des
   geometry::FeatureModelOptions features;
   features.spacing = options.spacing;
   features.features.angle_deg = options.feature_angle_deg;
+  features.features.made_from_scan = m.scan.has_value() || options.made_from_scan;
   features.max_points = options.limits.max_edge_points;
   features.cancel = options.cancel;
   try {

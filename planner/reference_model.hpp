@@ -36,6 +36,9 @@ struct ReferenceModelOptions {
   // For a raw scan (a file of points without faces): tolerance, bin size, adaptive bins. The scan's
   // coordinates are scaled first, so the tolerance and bin size are in mm.
   geometry::ScanOptions scan;
+  // The mesh file is one the scan front end made (a job's stored reference.ply): its features are
+  // taken as from the scan itself, whatever its vertex scatter (FeatureOptions::made_from_scan).
+  bool made_from_scan = false;
 };
 
 // Why a model file gives no reference model; what() names the file and, where its reader knows it,

@@ -21,6 +21,7 @@
 #include "geometry/mesh_io.hpp"
 #include "hal/fault.hpp"
 #include "recording_cmm.hpp"
+#include "sim/raw_scan.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/simulated_cmm.hpp"
 #include "tests/tools/small_tmpfs.hpp"
@@ -628,6 +629,30 @@ TEST_F(JobRunnerTest, AResumeRefusesAStoredMeshThatChanged) {
                                  " hashes to"));
   EXPECT_THAT(reason_, HasSubstr("not the mesh the job was planned on"));
   EXPECT_EQ(journal().size(), 2u) << "no touch on a mesh that is not the plan's";
+}
+
+// A raw scan's mesh is stored as well, and a resumed job takes its features as from the scan again:
+// judged by its vertex scatter alone, the stored mesh of a noise-free scan counts as clean (sides from
+// the single facets at the edge) where the scan's own counts as noisy, and the edge points would move.
+TEST_F(JobRunnerTest, AScansStoredMeshGivesTheSameEdgePointsAgain) {
+  start({{"model", "file:scan.xyz"}, {"tolerance_mm", 0.1}});
+  sim::RawScanOptions scan;
+  scan.spacing_mm = 0.8;
+  scan.noise_sigma_mm = 0;
+  geometry::write_cloud(dir_ / "models" / "scan.xyz", sim::synthesize_raw_scan(geometry::make_case3_block(1).mesh, scan).cloud);
+  const int id = store_->create(json::object(), "scan", request_->model).id;
+  const JobReference first = job_reference(*store_, id, *models_, *request_, config_->description.travel_box);
+  const JobReference again = job_reference(*store_, id, *models_, *request_, config_->description.travel_box);
+  ASSERT_TRUE(first.model.scan.has_value());
+  EXPECT_EQ(again.provenance.at("planned_on"), "stored_mesh");
+  EXPECT_TRUE(again.model.features.features.noisy);
+  ASSERT_EQ(again.model.features.points.size(), first.model.features.points.size());
+  for (std::size_t i = 0; i < first.model.features.points.size(); ++i) {
+    const geometry::EdgePoint &a = first.model.features.points[i], &b = again.model.features.points[i];
+    EXPECT_EQ(a.position, b.position) << "point " << i;
+    EXPECT_EQ(a.n_up, b.n_up) << "point " << i;
+    EXPECT_EQ(a.probeable, b.probeable) << "point " << i;
+  }
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ void mesh_and_extract(ScannedPart& s, const geometry::TriangleMesh& scene, const
   s.meshed = geometry::mesh_scan(raw.cloud, name, front);
   geometry::FeatureModelOptions features;
   features.spacing = 2;
+  features.features.made_from_scan = true;  // as the reference-model loader has it
   s.features = geometry::extract_features(s.meshed.mesh, features);
 }
 
@@ -216,9 +217,11 @@ TEST(RawScanMesh, PlateGridScanEdgesKeepBothSidesPastFoldsOfNoise) {
 // inside the wall's sheets and a patch there faces down however it is cut). At σ 0 the points' δ is
 // small: 66 probeable ones lie farther from the true edge than theirs, which the job would refuse. With
 // the crease there found from the walls' raw points and its profile from each face's (e621177): 3 of 324
-// concave, 9 beyond their δ.
+// concave, 9 beyond their δ. With the scan's mesh treated as noisy, as the loader has it (the sides
+// fitted over a neighbourhood, not taken from the facets at the edge): 0 of 319 concave, 2 beyond, 1
+// without both sides.
 TEST(RawScanMesh, PlateGridScanWithoutNoiseHasNoPatchFoldedOverItsRims) {
-  expect_sides_beyond_folds(plate_grid_scan(0, "plate grid scan without noise"), 0.02, 0.02, 0.05);
+  expect_sides_beyond_folds(plate_grid_scan(0, "plate grid scan without noise"), 0.01, 0.01, 0.02);
 }
 
 // The plate's random scan at σ ε/2 (seed 1), near the middle of its front top edge: a gap the growth left
