@@ -19,6 +19,7 @@ nlohmann::json scan_report_json(const geometry::ScanReport& r) {
   return {{"points_in", r.points_in},
           {"outliers_removed", r.outliers_removed},
           {"points_kept", r.points_kept},
+          {"points_sparse", r.points_sparse},
           {"triangles", r.triangles},
           {"bin_size_mm", r.bin_size_mm},
           {"bin_size_source", r.bin_size_source},

@@ -58,7 +58,9 @@ class Grower {
         seed_normals_(seed_normals),
         can_seed_(can_seed),
         options_(options),
-        max_edge_(options.max_edge_bins * options.bin_mm),
+        max_edge_(options.reach_mm.empty() ? options.max_edge_bins * options.bin_mm
+                                           : std::max(options.max_edge_bins * options.bin_mm,
+                                                      *std::max_element(options.reach_mm.begin(), options.reach_mm.end()))),
         cos_min_angle_(std::cos(options.min_angle_deg * std::numbers::pi / 180)),
         cos_fold_(std::cos(options.fold_angle_deg * std::numbers::pi / 180)),
         grid_(x, std::max(options.max_edge_bins * options.bin_mm, 1e-300)),
@@ -66,6 +68,17 @@ class Grower {
         used_(static_cast<std::size_t>(x.rows()), 0) {
     for (std::size_t i = 0; i < creases.size(); ++i) creases_.emplace(undirected(creases[i].a, creases[i].b), creases[i]);
     half_.reserve(static_cast<std::size_t>(x.rows()) * 7);
+    base_edge_ = options.max_edge_bins * options.bin_mm;
+    if (!options.reach_mm.empty()) {
+      sparse_.assign(options.reach_mm.size(), 0);
+      for (std::size_t v = 0; v < options.reach_mm.size(); ++v)
+        if (options.reach_mm[v] > base_edge_) sparse_[v] = 1, sparse_ids_.push_back(static_cast<int>(v));
+      if (!sparse_ids_.empty()) {
+        sparse_x_.resize(static_cast<Eigen::Index>(sparse_ids_.size()), 3);
+        for (std::size_t i = 0; i < sparse_ids_.size(); ++i) sparse_x_.row(static_cast<Eigen::Index>(i)) = x.row(sparse_ids_[i]);
+        sparse_grid_.emplace(sparse_x_, base_edge_);
+      }
+    }
   }
 
   FrontResult run() {
@@ -149,7 +162,9 @@ class Grower {
 
   int add_edge(int from, int to, int facet) {
     const int id = static_cast<int>(edges_.size());
-    longest_edge_ = std::max(longest_edge_, (at(to) - at(from)).norm());
+    const double length = (at(to) - at(from)).norm();
+    longest_edge_ = std::max(longest_edge_, length);
+    if (!sparse(from) || !sparse(to)) longest_dense_edge_ = std::max(longest_dense_edge_, length);
     Edge e;
     e.from = from;
     e.to = to;
@@ -211,11 +226,11 @@ class Grower {
   // No front edge nearby crosses the new edges, no front vertex lies in the facet.
   bool clear_of_front(const Frame& fr, int a, int q, int b, bool new_aq, bool new_qb, bool new_ba) const {
     const Vec2 pa = fr(at(a)), pq = fr(at(q)), pb = fr(at(b));
-    const double reach = std::max({(at(q) - fr.origin).norm(), (at(a) - fr.origin).norm(), (at(b) - fr.origin).norm()}) + longest_edge_;
-    const double slab = 0.75 * max_edge_;
+    const double span = std::max({(at(q) - fr.origin).norm(), (at(a) - fr.origin).norm(), (at(b) - fr.origin).norm()});
+    const double slab = 0.75 * local_edge(a, q, b);
     const double scale = (pa - pq).squaredNorm() + (pb - pq).squaredNorm();
     bool clear = true;
-    grid_.for_each_within(fr.origin, reach, [&](int v, double) {
+    const auto visit = [&](int v, double) {
       if (!clear || out_head_[v] < 0) return;
       if (std::abs(fr.height(at(v))) > slab) return;
       for (int o = out_head_[v]; o >= 0 && clear; o = edges_[o].next_out) {
@@ -235,7 +250,13 @@ class Grower {
           if (orient(pa, pq, pv) > eps && orient(pq, pb, pv) > eps && orient(pb, pa, pv) > eps) clear = false;
         }
       }
-    });
+    };
+    // A crossing edge has an end within the span and its own length of the origin. Edges longer than
+    // any with a dense end join two sparse points, which a grid of their own finds: the dense grid is
+    // searched no wider than its own edges need.
+    grid_.for_each_within(fr.origin, span + longest_dense_edge_, visit);
+    if (sparse_grid_ && longest_edge_ > longest_dense_edge_)
+      sparse_grid_->for_each_within(fr.origin, span + longest_edge_, [&](int i, double d2) { visit(sparse_ids_[static_cast<std::size_t>(i)], d2); });
     return clear;
   }
 
@@ -381,7 +402,9 @@ class Grower {
     const Edge& E = edges_[e];
     const Vec3 xa = at(E.from), xb = at(E.to), m = 0.5 * (xa + xb);
     candidates_.clear();
-    grid_.for_each_within(m, max_edge_, [&](int q, double d2) {
+    // A point within reach of both ends lies within the mean of their reaches of the edge's midpoint.
+    const double search = options_.reach_mm.empty() ? max_edge_ : 0.5 * (options_.reach_mm[E.from] + options_.reach_mm[E.to]);
+    grid_.for_each_within(m, search, [&](int q, double d2) {
       if (q == E.from || q == E.to || (used_[q] && out_head_[q] < 0)) return;
       if (!within_reach(q, E.from) || !within_reach(q, E.to)) return;
       candidates_.emplace_back(d2, q);
@@ -390,7 +413,8 @@ class Grower {
     if (loop_length(e, 6) <= 6)
       for (const int q : {edges_[E.prev].from, edges_[E.next].to}) {
         const bool listed = std::any_of(candidates_.begin(), candidates_.end(), [&](const auto& c) { return c.second == q; });
-        if (!listed && q != E.from && q != E.to && (at(q) - xa).norm() <= 2 * max_edge_ && (at(q) - xb).norm() <= 2 * max_edge_)
+        if (const double longest = 2 * local_edge(E.from, E.to, q);
+            !listed && q != E.from && q != E.to && (at(q) - xa).norm() <= longest && (at(q) - xb).norm() <= longest)
           candidates_.emplace_back((at(q) - m).squaredNorm(), q);
       }
     std::sort(candidates_.begin(), candidates_.end());
@@ -406,7 +430,7 @@ class Grower {
   bool seed(int s) {
     const Vec3 xs = at(s);
     std::vector<std::pair<double, int>> near;
-    grid_.for_each_within(xs, max_edge_, [&](int q, double d2) {
+    grid_.for_each_within(xs, options_.reach_mm.empty() ? max_edge_ : options_.reach_mm[s], [&](int q, double d2) {
       if (q != s && !used_[q] && within_reach(q, s)) near.emplace_back(d2, q);
     });
     std::sort(near.begin(), near.end());
@@ -443,8 +467,9 @@ class Grower {
   bool holds_a_point(const Frame& fr, int a, int b, int c) const {
     const Vec2 pa = fr(at(a)), pb = fr(at(b)), pc = fr(at(c));
     bool holds = false;
-    grid_.for_each_within(fr.origin, max_edge_, [&](int v, double) {
-      if (v == a || v == b || v == c || std::abs(fr.height(at(v))) > 0.5 * max_edge_) return;
+    const double edge = local_edge(a, b, c);
+    grid_.for_each_within(fr.origin, edge, [&](int v, double) {
+      if (v == a || v == b || v == c || std::abs(fr.height(at(v))) > 0.5 * edge) return;
       const Vec2 p = fr(at(v));
       if (orient(pa, pb, p) > 0 && orient(pb, pc, p) > 0 && orient(pc, pa, p) > 0) holds = true;
     });
@@ -468,6 +493,21 @@ class Grower {
   std::deque<int> queue_;
   std::vector<std::pair<double, int>> candidates_;
   double longest_edge_ = 0;  // of any front edge so far: how far a crossing edge's ends can be
+  double longest_dense_edge_ = 0;  // of those with an end that is not sparse
+  double base_edge_;               // max_edge_bins · bin_mm: a point's reach unless reach_mm says more
+  std::vector<char> sparse_;       // per vertex: its reach is beyond base_edge_ (a sparse face's point)
+  Points sparse_x_;                // those vertices, for their own grid
+  std::vector<int> sparse_ids_;
+  std::optional<PointGrid> sparse_grid_;
+
+  bool sparse(int v) const { return !sparse_.empty() && sparse_[static_cast<std::size_t>(v)]; }
+  // The longest edge a facet on these corners may have: B's, or more where one is a sparse face's point
+  // (so a dense face is grown and checked as if no face were sparse).
+  double local_edge(int a, int b, int c) const {
+    if (sparse_ids_.empty()) return max_edge_;
+    return std::max({base_edge_, options_.reach_mm[static_cast<std::size_t>(a)], options_.reach_mm[static_cast<std::size_t>(b)],
+                     options_.reach_mm[static_cast<std::size_t>(c)]});
+  }
 };
 
 }  // namespace

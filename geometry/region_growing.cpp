@@ -294,7 +294,7 @@ Triangulation triangulate_scan(const Points& thinned, const Points& raw, const s
   const bool have_fits = raw.rows() > 0 && static_cast<Eigen::Index>(raw_fits.size()) == raw.rows();
   // Adaptive bins: a point is crowded at half its own bin, not the coarsest one.
   std::vector<double> min_spacing(static_cast<std::size_t>(thinned.rows()), options.min_spacing_bins * bin);
-  for (std::size_t i = 0; i < options.reach_mm.size() && i < min_spacing.size(); ++i)
+  for (std::size_t i = 0; options.reach_from_bins && i < options.reach_mm.size() && i < min_spacing.size(); ++i)
     min_spacing[i] = options.min_spacing_bins * options.reach_mm[i] / options.max_edge_bins;
   const std::vector<int> kept = kept_points(thinned, off_surface(thinned, have_fits, raw_fits, raw_index), creases, bin, min_spacing);
   const Vertices v = gather_vertices(thinned, kept, creases, raw, raw_fits, raw_index, bin, deg(options.crease_angle_deg));

@@ -23,9 +23,14 @@ struct RegionGrowingOptions {
   // Thinned points closer than this many bins to one kept before them are left out: a noisy surface
   // puts points in bins stacked across it, and such pairs would only make slivers and folds.
   double min_spacing_bins = 0.5;
-  // Per thinned point, the longest edge it may have (adaptive bins: max_edge_bins times its own bin);
+  // Per thinned point, the longest edge it may have (adaptive bins: max_edge_bins times its own bin; a
+  // sparse face: its sampling's, sparse_reach in scan_front_end.cpp);
   // empty: max_edge_bins·bin_mm for every point. Crease points take max_edge_bins·bin_mm.
   std::vector<double> reach_mm;
+  // Whether reach_mm is each point's own bin's (adaptive bins: a point is crowded at min_spacing_bins of
+  // its own bin) or its sampling's, on a face sparser than B needs (crowded at min_spacing_bins of B, as
+  // any: a sparse face has no points to spare).
+  bool reach_from_bins = true;
   // The scan's noise σ off the surface: a point whose fit was irregular keeps its raw, noisy place,
   // so the gap-closing pass allows loops this much (×3) off flat.
   double noise_sigma_mm = 0;

@@ -3,8 +3,10 @@
 #include "geometry/scan_front_end.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -97,6 +99,17 @@ PointCloud subset(const PointCloud& cloud, const std::vector<int>& ids) {
 
 }  // namespace
 
+std::vector<double> sparse_reach(const std::vector<int>& kept, const std::vector<LocalSurface>& fits, double bin_mm, int neighbours) {
+  const double base = kMaxEdgeBins * bin_mm;
+  std::vector<double> reach;
+  reach.reserve(kept.size());
+  for (int k : kept) {
+    const double spacing = fits[static_cast<std::size_t>(k)].radius_mm * std::sqrt(std::numbers::pi / neighbours);
+    reach.push_back(std::clamp(2.5 * spacing, base, 2 * base));
+  }
+  return reach;
+}
+
 ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanOptions& options) {
   check_cloud(cloud, name, options);
   ScanMesh out;
@@ -144,7 +157,7 @@ ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanO
   adaptive.tolerance_mm = options.tolerance_mm;
   adaptive.cancel = options.cancel;
   std::vector<int> kept;
-  std::vector<double> reach;  // adaptive: per kept point, the longest edge its bin allows
+  std::vector<double> reach;  // per kept point, the longest edge its bin (adaptive) or its sampling (sparse) allows
   try {
     if (options.adaptive) {
       AdaptiveThinning thinned = thin_adaptive(scan.points, fits, adaptive);
@@ -152,6 +165,9 @@ ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanO
       for (int level : thinned.levels) reach.push_back(kMaxEdgeBins * std::ldexp(report.bin_size_mm, level));
     } else {
       kept = thin_uniform(scan.points, report.bin_size_mm, options.cancel);
+      reach = sparse_reach(kept, fits, report.bin_size_mm, options.neighbours);
+      report.points_sparse = static_cast<std::size_t>(
+          std::count_if(reach.begin(), reach.end(), [&](double r) { return r > kMaxEdgeBins * report.bin_size_mm; }));
     }
   } catch (const std::invalid_argument& e) {
     // A bin so small that the cloud's extent overflows the bin keys (--bin-size 1e-300).
@@ -173,8 +189,10 @@ ScanMesh mesh_scan(const PointCloud& cloud, const std::string& name, const ScanO
   // Adaptive bins reach B·2^max_level on flat faces, and the growth must join their points too.
   growing.bin_mm = report.bin_size_mm * (options.adaptive ? std::ldexp(1.0, adaptive.max_level) : 1.0);
   growing.max_edge_bins = kMaxEdgeBins;
-  // Adaptive: each point's edges no longer than its own bin allows, so curved parts keep short edges.
+  // Each point's edges no longer than its own bin allows (adaptive: curved parts keep short edges) or, on a
+  // sparse face, than its sampling needs.
   growing.reach_mm = std::move(reach);
+  growing.reach_from_bins = options.adaptive;
   growing.noise_sigma_mm = report.noise_sigma_mm;
   growing.cancel = options.cancel;
   Triangulation t = triangulate_scan(thinned, scan.points, fits, index, scan.normals, growing);

@@ -115,6 +115,9 @@ void print_summary(const Options& o, const StageTimes& times, const geometry::Fe
                 s.points_in, s.outliers_removed, s.noise_sigma_mm);
     std::printf("thin       bin %.4f mm: %s; %zu points kept%s\n", s.bin_size_mm, s.bin_size_source.c_str(), s.points_kept,
                 in.scan_options && in.scan_options->adaptive ? " (adaptive bins)" : "");
+    if (s.points_sparse > 0)
+      std::printf("sparse     %zu kept points where the scan is sparser than the bin needs: their edges follow its spacing, "
+                  "and the tolerance is not held there\n", s.points_sparse);
     std::printf("mesh       %zu triangles, %zu component(s), %zu outer and %zu hole loop(s), %zu crease(s) joined with %zu "
                 "points on them%s%s\n",
                 s.triangles, s.components, s.outer_loops, s.hole_loops, s.creases, s.crease_points,

@@ -150,6 +150,7 @@ json scan_json(const PlanInputs& inputs) {
           {"bin_size_mm", r.bin_size_mm},
           {"bin_size_source", r.bin_size_source},
           {"points_kept", r.points_kept},
+          {"points_sparse", r.points_sparse},
           {"triangles", r.triangles},
           {"components", r.components},
           {"outer_loops", r.outer_loops},

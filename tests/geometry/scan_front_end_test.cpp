@@ -310,6 +310,13 @@ TEST(ScanFrontEnd, SameMeshOnOneAndTwoThreads) {
 namespace cmm::geometry {
 namespace {
 
+PointCloud cloud_of(const std::vector<Vec3>& points) {
+  PointCloud cloud;
+  cloud.points.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i) cloud.points.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  return cloud;
+}
+
 // A speck beside the surface (a dense 1.2 mm cluster 3 mm above a plane, too many points for the outlier
 // removal to take) meshes into a few facets: it is dropped, not kept as a component with a loop of its own.
 TEST(ScanFrontEnd, ASpeckBesideTheSurfaceIsNoComponentOfIt) {
@@ -318,9 +325,7 @@ TEST(ScanFrontEnd, ASpeckBesideTheSurfaceIsNoComponentOfIt) {
     for (double y = 0; y <= 15; y += 0.1) points.emplace_back(x, y, 0);
   for (double x = 0; x <= 1.2; x += 0.05)
     for (double y = 0; y <= 1.2; y += 0.05) points.emplace_back(5 + x, 5 + y, 3);
-  PointCloud cloud;
-  cloud.points.resize(static_cast<Eigen::Index>(points.size()), 3);
-  for (std::size_t i = 0; i < points.size(); ++i) cloud.points.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  const PointCloud cloud = cloud_of(points);
   ScanOptions options;
   options.tolerance_mm = 0.05;
   const ScanMesh m = mesh_scan(cloud, "plane with a speck", options);
@@ -328,6 +333,34 @@ TEST(ScanFrontEnd, ASpeckBesideTheSurfaceIsNoComponentOfIt) {
   EXPECT_EQ(m.report.outer_loops + m.report.hole_loops, 1u);
   for (Eigen::Index f = 0; f < m.mesh.faces.rows(); ++f)
     for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(m.mesh.vertices(m.mesh.faces(f, k), 2)), 1e-6) << "facet " << f;
+}
+
+// A face sampled at a sixth of its neighbour's density (4 against 25 points per mm², at random), at a bin
+// the dense one asks for: edges of √6·B (0.86 mm) cannot join points 0.5 mm apart on average with random
+// gaps beyond 1 mm, and the sparse half came out in tatters (8 components, 4 loops, 506 of the 800 mm²
+// meshed). Its points now reach their own spacing: one component, 701 mm² (one loop stays in the sparse
+// half; the outlier filter, whose bound the dense half sets, takes 238 points), and only the sparse
+// half's points counted as such.
+TEST(ScanFrontEnd, AFaceSparserThanTheBinNeedsIsMeshedAtItsOwnSpacing) {
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 25 * 400; ++i) points.emplace_back(20 * u(random), 20 * u(random), 0);
+  for (int i = 0; i < 4 * 400; ++i) points.emplace_back(20 + 20 * u(random), 20 * u(random), 0);
+  const PointCloud cloud = cloud_of(points);
+  ScanOptions options;
+  options.bin_size_mm = 0.35;
+  const ScanMesh m = mesh_scan(cloud, "half dense, half sparse", options);
+  EXPECT_EQ(m.report.components, 1u);
+  EXPECT_LE(m.report.outer_loops + m.report.hole_loops, 2u);
+  EXPECT_GT(m.report.points_sparse, 900u);   // most of the sparse half's 1,600
+  EXPECT_LT(m.report.points_sparse, 1400u);  // and none of the dense half's but at the seam
+  double area = 0;
+  for (Eigen::Index f = 0; f < m.mesh.faces.rows(); ++f)
+    area += (vertex(m.mesh, m.mesh.faces(f, 1)) - vertex(m.mesh, m.mesh.faces(f, 0)))
+                .cross(vertex(m.mesh, m.mesh.faces(f, 2)) - vertex(m.mesh, m.mesh.faces(f, 0)))
+                .norm() / 2;
+  EXPECT_GT(area, 400 + 0.7 * 400);  // the dense half and 70 % of the sparse one (26 % without)
 }
 
 }  // namespace
