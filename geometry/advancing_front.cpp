@@ -76,7 +76,11 @@ class Grower {
       if (!sparse_ids_.empty()) {
         sparse_x_.resize(static_cast<Eigen::Index>(sparse_ids_.size()), 3);
         for (std::size_t i = 0; i < sparse_ids_.size(); ++i) sparse_x_.row(static_cast<Eigen::Index>(i)) = x.row(sparse_ids_[i]);
-        sparse_grid_.emplace(sparse_x_, base_edge_);
+        sparse_grid_.emplace(sparse_x_, 2 * max_edge_);  // cells as wide as its searches: few to visit
+        // A long edge can cross only a facet with a corner within three of the longest edges of its ends.
+        near_sparse_.assign(static_cast<std::size_t>(x.rows()), 0);
+        for (Eigen::Index v = 0; v < x.rows(); ++v)
+          sparse_grid_->for_each_within(x.row(v).transpose(), 3 * max_edge_, [&](int, double) { near_sparse_[static_cast<std::size_t>(v)] = 1; });
       }
     }
   }
@@ -255,7 +259,7 @@ class Grower {
     // any with a dense end join two sparse points, which a grid of their own finds: the dense grid is
     // searched no wider than its own edges need.
     grid_.for_each_within(fr.origin, span + longest_dense_edge_, visit);
-    if (sparse_grid_ && longest_edge_ > longest_dense_edge_)
+    if (sparse_grid_ && longest_edge_ > longest_dense_edge_ && near_sparse_[static_cast<std::size_t>(a)])
       sparse_grid_->for_each_within(fr.origin, span + longest_edge_, [&](int i, double d2) { visit(sparse_ids_[static_cast<std::size_t>(i)], d2); });
     return clear;
   }
@@ -499,6 +503,7 @@ class Grower {
   Points sparse_x_;                // those vertices, for their own grid
   std::vector<int> sparse_ids_;
   std::optional<PointGrid> sparse_grid_;
+  std::vector<char> near_sparse_;  // per vertex: a sparse point lies within 3·max_edge_
 
   bool sparse(int v) const { return !sparse_.empty() && sparse_[static_cast<std::size_t>(v)]; }
   // The longest edge a facet on these corners may have: B's, or more where one is a sparse face's point
