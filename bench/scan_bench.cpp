@@ -114,12 +114,7 @@ std::unique_ptr<Prepared> prepare(const PointCloud& raw) {
   p->bin = bin_size_for_tolerance(p->clean.points, p->fits, *p->index, bin_options);
   p->kept = thin_uniform(p->clean.points, p->bin.bin_mm);
   p->thinned.resize(static_cast<Eigen::Index>(p->kept.size()), 3);
-  // As mesh_scan: a kept point onto its fitted surface where the fit is regular.
-  for (std::size_t i = 0; i < p->kept.size(); ++i) {
-    const LocalSurface& fit = p->fits[static_cast<std::size_t>(p->kept[i])];
-    const Vec3 at = fit.regular ? fit.on_surface : Vec3(p->clean.points.row(p->kept[i]).transpose());
-    p->thinned.row(static_cast<Eigen::Index>(i)) = at.transpose();
-  }
+  for (std::size_t i = 0; i < p->kept.size(); ++i) p->thinned.row(static_cast<Eigen::Index>(i)) = p->clean.points.row(p->kept[i]);
   return p;
 }
 
