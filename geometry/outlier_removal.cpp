@@ -14,10 +14,14 @@ namespace cmm::geometry {
 namespace {
 constexpr int block = 1 << 15;  // points between polls of the cancel check
 
-// A point on the border of the scanned surface has neighbours on one side only, so its mean distance to
-// them is up to twice theirs (a quarter disk at a face's corner) and may pass μ + ratio·σ where the scan
-// is dense and even; it lies on the plane of its neighbours within their own scatter about it. A stray
-// lies off that plane or much farther from its neighbours than they lie from theirs.
+// Beyond μ + ratio·σ a point may still be the surface: a border of an evenly scanned face (neighbours on
+// one side only, so its mean distance to them is up to twice theirs, a quarter disk at a face's corner) or
+// a face scanned far more sparsely than the rest (a side one sparse view saw, the lower wall of a bore:
+// μ and σ are the dense faces', and PCL's filter took 524 of 800 points of a face at 2 points per mm²
+// beside one at 25). Either lies on the plane of its neighbours within their own scatter about it and no
+// farther from them than twice as far as they lie from theirs (median). A stray lies off that plane or
+// much farther. The scatter is the neighbours' median distance from their plane (×1.4826, σ for Gaussian
+// noise), so that another stray among them does not widen it.
 bool on_its_neighbours_surface(const Points& points, const CloudIndex& index, const std::vector<double>& mean, int i,
                                std::size_t k, std::vector<int>& ids, std::vector<double>& squared) {
   const Vec3 p = points.row(i).transpose();
@@ -29,23 +33,20 @@ bool on_its_neighbours_surface(const Points& points, const CloudIndex& index, co
     theirs.push_back(mean[static_cast<std::size_t>(ids[j])]);
     centre += points.row(ids[j]).transpose() / static_cast<double>(ids.size() - 1);
   }
-  std::nth_element(theirs.begin(), theirs.begin() + static_cast<std::ptrdiff_t>(theirs.size() / 2), theirs.end());
-  if (mean[static_cast<std::size_t>(i)] > 2 * theirs[theirs.size() / 2]) return false;
+  const auto middle = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  if (mean[static_cast<std::size_t>(i)] > 2 * middle(theirs)) return false;
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (std::size_t j = 1; j < ids.size(); ++j) {
     const Vec3 d = points.row(ids[j]).transpose() - centre;
     scatter += d * d.transpose();
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
-  const Vec3 normal = eigen.eigenvectors().col(0);
-  const double rms = std::sqrt(std::max(0.0, eigen.eigenvalues()(0)) / static_cast<double>(ids.size() - 1));
-  // One-sided: the neighbours' centre lies off the point along the surface by a good part of their mean
-  // distance (0.64 of it at a straight border, about 0.2 amid a surface sampled at random, where a sparse
-  // patch is PCL's to judge as before).
-  const Vec3 off = centre - p;
-  const double beside = (off - off.dot(normal) * normal).norm();
-  return beside >= 0.35 * mean[static_cast<std::size_t>(i)] &&
-         std::abs((p - centre).dot(normal)) <= 3 * rms + 1e-9 * mean[static_cast<std::size_t>(i)];
+  const Vec3 normal = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+  std::vector<double> off;
+  for (std::size_t j = 1; j < ids.size(); ++j) off.push_back(std::abs((points.row(ids[j]).transpose() - centre).dot(normal)));
+  return std::abs((p - centre).dot(normal)) <= 3 * 1.4826 * middle(off) + 1e-9 * mean[static_cast<std::size_t>(i)];
 }
 }  // namespace
 
@@ -83,11 +84,10 @@ std::vector<int> statistical_inliers(const Points& points, const CloudIndex& ind
     std::vector<double> squared;
     for (int i = r.begin(); i < r.end(); ++i) {
       const auto at = static_cast<std::size_t>(i);
-      // Only within 2 μ: a border of an evenly sampled face lies at about 1.4 μ (half a disk of
-      // neighbours), a face's corner at 2 μ; beyond, a sparse fringe of one view (deep in the plate's
-      // slot, scanned at a grazing angle) came back as specks of their own that no gap closing joined.
-      keep[at] = mean[at] <= threshold ||
-                 (mean[at] <= 2 * mu && on_its_neighbours_surface(points, index, mean, i, k, ids, squared));
+      // Beyond 2 μ too (once left to PCL's rule: a sparse fringe of one view deep in the plate's slot came
+      // back as specks; region growing now drops a component that small, and meshes a sparse face at its
+      // own spacing).
+      keep[at] = mean[at] <= threshold || on_its_neighbours_surface(points, index, mean, i, k, ids, squared);
     }
   });
   std::vector<int> inliers;
