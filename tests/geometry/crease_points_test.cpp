@@ -40,8 +40,12 @@ Points right_angle(double top_density, double side_density, double sigma, std::u
   return p;
 }
 
-// The share of the edge (y from 2 to 28, in 0.5 mm steps) with a crease point within 0.1 mm of it.
-double edge_found(const Points& cloud) {
+struct EdgeFound {
+  double share = 0;           // of the edge (y from 2 to 28, in 0.5 mm steps) with a crease point within 0.1 mm
+  std::size_t polylines = 0;  // the crease is found in this many pieces (one would do)
+};
+
+EdgeFound edge_found(const Points& cloud) {
   const CloudIndex index(cloud);
   const std::vector<LocalSurface> fits = fit_local_surfaces(cloud, index);
   CreaseOptions options;
@@ -52,19 +56,34 @@ double edge_found(const Points& cloud) {
     const Vec3& x = c.position;
     if (std::hypot(x.x(), x.z()) <= 0.1 && x.y() >= 2 && x.y() < 28) steps.insert(static_cast<int>((x.y() - 2) / 0.5));
   }
-  return static_cast<double>(steps.size()) / 52;
+  return {static_cast<double>(steps.size()) / 52, creases.polylines.size()};
 }
 
+// Found along 87–96 % in 4–7 pieces when the look beside a flat face went no wider than 3 B and pieces
+// were joined across 2.5 B at most; now 98–100 % in one or two.
 TEST(CreasePoints, FoundBesideAFaceScannedEightTimesMoreSparsely) {
   for (const std::uint64_t seed : {1, 2, 3}) {
-    const double share = edge_found(right_angle(40, 5, 0.025, seed));
-    std::printf("seed %d: crease found along %.0f %% of the edge\n", static_cast<int>(seed), 100 * share);
-    EXPECT_GE(share, 0.8) << "seed " << seed;
+    const EdgeFound found = edge_found(right_angle(40, 5, 0.025, seed));
+    std::printf("seed %d: crease found along %.0f %% of the edge in %zu pieces\n", static_cast<int>(seed), 100 * found.share, found.polylines);
+    EXPECT_GE(found.share, 0.95) << "seed " << seed;
+    EXPECT_LE(found.polylines, 2u) << "seed " << seed;
+  }
+}
+
+// At 2 points per mm² (a side seen only by a merged scan's sparse view, at 100k points on the plate) the
+// side's points within 3 B of the edge are too few to be a face: the crease was found along 0–8 % of the
+// edge. Looking beside the top face out to 6 B and joining the pieces on one line across up to 8 B where
+// the raw points run along the gap: 79–88 %.
+TEST(CreasePoints, FoundBesideAFaceScannedTwentyTimesMoreSparsely) {
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    const EdgeFound found = edge_found(right_angle(40, 2, 0.025, seed));
+    std::printf("seed %d: crease found along %.0f %% of the edge in %zu pieces\n", static_cast<int>(seed), 100 * found.share, found.polylines);
+    EXPECT_GE(found.share, 0.75) << "seed " << seed;
   }
 }
 
 TEST(CreasePoints, FoundWhereBothFacesAreScannedAlike) {
-  EXPECT_GE(edge_found(right_angle(20, 20, 0.025, 1)), 0.9);
+  EXPECT_GE(edge_found(right_angle(20, 20, 0.025, 1)).share, 0.9);
 }
 
 // A curved crease: the bicone r = 10 − |z| (45° faces, the crease a circle of radius 10) sampled at random
