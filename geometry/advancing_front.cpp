@@ -168,7 +168,8 @@ class Grower {
     const int id = static_cast<int>(edges_.size());
     const double length = (at(to) - at(from)).norm();
     longest_edge_ = std::max(longest_edge_, length);
-    if (!sparse(from) || !sparse(to)) longest_dense_edge_ = std::max(longest_dense_edge_, length);
+    // An edge with a sparse end is found from that end on the sparse grid (clear_of_front).
+    if (!sparse(from) && !sparse(to)) longest_dense_edge_ = std::max(longest_dense_edge_, length);
     Edge e;
     e.from = from;
     e.to = to;
@@ -256,7 +257,7 @@ class Grower {
       }
     };
     // A crossing edge has an end within the span and its own length of the origin. Edges longer than
-    // any with a dense end join two sparse points, which a grid of their own finds: the dense grid is
+    // any between two dense points have a sparse end, which a grid of their own finds: the dense grid is
     // searched no wider than its own edges need.
     grid_.for_each_within(fr.origin, span + longest_dense_edge_, visit);
     if (sparse_grid_ && longest_edge_ > longest_dense_edge_ && near_sparse_[static_cast<std::size_t>(a)])
@@ -398,7 +399,9 @@ class Grower {
   // allows at ε. (The larger reach put coarse edges over the curved side of a level change, 0.04 mm
   // off at ε 0.01; the graded levels leave no gap with the smaller.)
   bool within_reach(int a, int b) const {
-    const double reach = options_.reach_mm.empty() ? max_edge_ : std::min(options_.reach_mm[a], options_.reach_mm[b]);
+    const double reach = options_.reach_mm.empty()       ? max_edge_
+                         : options_.larger_reach_joins ? std::max(options_.reach_mm[a], options_.reach_mm[b])
+                                                         : std::min(options_.reach_mm[a], options_.reach_mm[b]);
     return (at(a) - at(b)).squaredNorm() <= reach * reach;
   }
 
@@ -406,8 +409,11 @@ class Grower {
     const Edge& E = edges_[e];
     const Vec3 xa = at(E.from), xb = at(E.to), m = 0.5 * (xa + xb);
     candidates_.clear();
-    // A point within reach of both ends lies within the mean of their reaches of the edge's midpoint.
-    const double search = options_.reach_mm.empty() ? max_edge_ : 0.5 * (options_.reach_mm[E.from] + options_.reach_mm[E.to]);
+    // A point within reach of both ends lies within the mean of their reaches of the edge's midpoint, or
+    // with the larger reach joining, within a sparse point's reach where one is near.
+    const bool sparse_near = options_.larger_reach_joins && !near_sparse_.empty() &&
+                             (near_sparse_[static_cast<std::size_t>(E.from)] || near_sparse_[static_cast<std::size_t>(E.to)]);
+    const double search = options_.reach_mm.empty() || sparse_near ? max_edge_ : 0.5 * (options_.reach_mm[E.from] + options_.reach_mm[E.to]);
     grid_.for_each_within(m, search, [&](int q, double d2) {
       if (q == E.from || q == E.to || (used_[q] && out_head_[q] < 0)) return;
       if (!within_reach(q, E.from) || !within_reach(q, E.to)) return;
@@ -497,7 +503,7 @@ class Grower {
   std::deque<int> queue_;
   std::vector<std::pair<double, int>> candidates_;
   double longest_edge_ = 0;  // of any front edge so far: how far a crossing edge's ends can be
-  double longest_dense_edge_ = 0;  // of those with an end that is not sparse
+  double longest_dense_edge_ = 0;  // of those with no sparse end
   double base_edge_;               // max_edge_bins · bin_mm: a point's reach unless reach_mm says more
   std::vector<char> sparse_;       // per vertex: its reach is beyond base_edge_ (a sparse face's point)
   Points sparse_x_;                // those vertices, for their own grid

@@ -35,13 +35,19 @@ struct FrontOptions {
   double min_angle_deg = 10;
   double fold_angle_deg = 45;        // largest turn between a facet and the one it grows from
   double max_edge_bins = 2.5;        // no edge longer than this many bins (√3 B between neighbour bins, and some)
-  // Per vertex, the longest edge it may have (adaptive bins: its own bin's reach); an edge is no longer
-  // than the smaller of its ends'. Empty: max_edge_bins·bin_mm for all.
+  // Per vertex, the longest edge it may have (adaptive bins: its own bin's reach; a sparse face: its
+  // sampling's); an edge is no longer than the smaller of its ends' reaches, or with
+  // `larger_reach_joins` the larger. Empty: max_edge_bins·bin_mm for all.
   std::vector<double> reach_mm;
   CancelCheck cancel;
   // The seed normals came from a scanner and agree with each other: a facet that faces against those
   // of its corners is grown inside out (a fold through a small bore's mouth) and is refused.
   bool seed_normals_oriented = false;
+  // Sparse reaches: a sparse face's points lie farther from the denser face they run into than that
+  // face's own reach, and with the smaller reach the two never join (a wall's lower half seen only by a
+  // sparse view grew apart from the rest and was dropped as a speck). Adaptive bins keep the smaller: a
+  // coarse bin's chord over a fine bin's curve is off by more than ε.
+  bool larger_reach_joins = false;
 };
 
 struct FrontResult {

@@ -335,32 +335,88 @@ TEST(ScanFrontEnd, ASpeckBesideTheSurfaceIsNoComponentOfIt) {
     for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(m.mesh.vertices(m.mesh.faces(f, k), 2)), 1e-6) << "facet " << f;
 }
 
-// A face sampled at a sixth of its neighbour's density (4 against 25 points per mm², at random), at a bin
-// the dense one asks for: edges of √6·B (0.86 mm) cannot join points 0.5 mm apart on average with random
-// gaps beyond 1 mm, and the sparse half came out in tatters (8 components, 4 loops, 506 of the 800 mm²
-// meshed). Its points now reach their own spacing: one component, 701 mm² (one loop stays in the sparse
-// half; the outlier filter, whose bound the dense half sets, takes 238 points), and only the sparse
-// half's points counted as such.
-TEST(ScanFrontEnd, AFaceSparserThanTheBinNeedsIsMeshedAtItsOwnSpacing) {
+double mesh_area(const TriangleMesh& mesh) {
+  double area = 0;
+  for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
+    area += (vertex(mesh, mesh.faces(f, 1)) - vertex(mesh, mesh.faces(f, 0))).cross(vertex(mesh, mesh.faces(f, 2)) - vertex(mesh, mesh.faces(f, 0))).norm() / 2;
+  return area;
+}
+
+// A 20 × 20 mm face at 25 points per mm² at random and, beside it, one as large at `sparse` points per mm²,
+// meshed at the bin the dense one asks for (0.35 mm).
+ScanMesh half_dense_half_sparse(double sparse) {
   std::mt19937_64 random(7);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<Vec3> points;
   for (int i = 0; i < 25 * 400; ++i) points.emplace_back(20 * u(random), 20 * u(random), 0);
-  for (int i = 0; i < 4 * 400; ++i) points.emplace_back(20 + 20 * u(random), 20 * u(random), 0);
-  const PointCloud cloud = cloud_of(points);
+  for (int i = 0; i < static_cast<int>(sparse * 400); ++i) points.emplace_back(20 + 20 * u(random), 20 * u(random), 0);
   ScanOptions options;
   options.bin_size_mm = 0.35;
-  const ScanMesh m = mesh_scan(cloud, "half dense, half sparse", options);
+  return mesh_scan(cloud_of(points), "half dense, half sparse", options);
+}
+
+// At a sixth of the dense face's density (4 points per mm²) edges of √6·B (0.86 mm) cannot join points
+// 0.5 mm apart on average with random gaps beyond 1 mm, and the sparse half came out in tatters (8
+// components, 4 loops, 506 of the 800 mm² meshed). Its points now reach their own spacing, and only the
+// sparse half's points are counted as such: one component, one loop, 776 mm² (701 and two loops while the
+// outlier filter, whose bound the dense half sets, took 238 of its points).
+TEST(ScanFrontEnd, AFaceSparserThanTheBinNeedsIsMeshedAtItsOwnSpacing) {
+  const ScanMesh m = half_dense_half_sparse(4);
   EXPECT_EQ(m.report.components, 1u);
-  EXPECT_LE(m.report.outer_loops + m.report.hole_loops, 2u);
+  EXPECT_EQ(m.report.outer_loops + m.report.hole_loops, 1u);
+  EXPECT_LT(m.report.outliers_removed, 20u);
   EXPECT_GT(m.report.points_sparse, 900u);   // most of the sparse half's 1,600
   EXPECT_LT(m.report.points_sparse, 1400u);  // and none of the dense half's but at the seam
-  double area = 0;
-  for (Eigen::Index f = 0; f < m.mesh.faces.rows(); ++f)
-    area += (vertex(m.mesh, m.mesh.faces(f, 1)) - vertex(m.mesh, m.mesh.faces(f, 0)))
-                .cross(vertex(m.mesh, m.mesh.faces(f, 2)) - vertex(m.mesh, m.mesh.faces(f, 0)))
-                .norm() / 2;
-  EXPECT_GT(area, 400 + 0.7 * 400);  // the dense half and 70 % of the sparse one (26 % without)
+  EXPECT_GT(mesh_area(m.mesh), 400 + 0.9 * 400);  // the dense half and 90 % of the sparse one (26 % at first)
+}
+
+// At 2 points per mm² (a twelfth; 0.7 mm apart, 2 B): the outlier filter took 535 of the sparse half's 800
+// points and the rest came out in 3 components, 419 mm² in all. Now one, 761 mm².
+TEST(ScanFrontEnd, AFaceATwelfthAsDenseIsMeshedWhole) {
+  const ScanMesh m = half_dense_half_sparse(2);
+  EXPECT_EQ(m.report.components, 1u);
+  EXPECT_EQ(m.report.outer_loops + m.report.hole_loops, 1u);
+  EXPECT_LT(m.report.outliers_removed, 20u);
+  EXPECT_GT(mesh_area(m.mesh), 400 + 0.85 * 400);
+}
+
+// A grid at 0.25 mm and, 1.2 mm past its edge, one at 0.8 mm (a sparse view's face meeting the dense ones
+// at B 0.35 mm): the sparse points reach 1.7 mm, the dense ones 0.86. An edge no longer than the smaller
+// reach never crossed the seam, and the two grew as two components with two loops (the lower wall of a
+// bore seen only by a sparse view grew apart and was dropped as a speck); with the larger, one.
+TEST(ScanFrontEnd, ASparseFaceJoinsTheDenseFaceItMeets) {
+  std::vector<Vec3> points;
+  for (double x = 0; x <= 10 + 1e-9; x += 0.25)
+    for (double y = 0; y <= 12 + 1e-9; y += 0.25) points.emplace_back(x, y, 0);
+  for (double x = 11.2; x <= 22 + 1e-9; x += 0.8)
+    for (double y = 0; y <= 12 + 1e-9; y += 0.8) points.emplace_back(x, y, 0);
+  ScanOptions options;
+  options.bin_size_mm = 0.35;
+  const ScanMesh m = mesh_scan(cloud_of(points), "dense grid beside a sparse one", options);
+  EXPECT_EQ(m.report.components, 1u);
+  EXPECT_EQ(m.report.outer_loops + m.report.hole_loops, 1u);
+  EXPECT_GT(mesh_area(m.mesh), 0.95 * 22 * 12);
+}
+
+// A patch apart from the surface smaller than a square 8 bins on a side (a band of wall seen deep in a Ø3
+// hole at B 0.7 mm) is dropped however many facets it has; a larger one stays, a component of its own.
+TEST(ScanFrontEnd, APatchApartSmallerThanEightBinsSquareIsDropped) {
+  const auto patch_above_a_plane = [](double side) {
+    std::vector<Vec3> points;
+    for (double x = 0; x <= 15; x += 0.1)
+      for (double y = 0; y <= 15; y += 0.1) points.emplace_back(x, y, 0);
+    for (double x = 0; x <= side + 1e-9; x += 0.1)
+      for (double y = 0; y <= side + 1e-9; y += 0.1) points.emplace_back(5 + x, 5 + y, 3);
+    ScanOptions options;
+    options.bin_size_mm = 0.25;  // 8 bins square: 4 mm²
+    return mesh_scan(cloud_of(points), "plane with a patch above", options);
+  };
+  const ScanMesh small = patch_above_a_plane(1.8);  // 3.2 mm², 18 facets and more once its gaps are filled
+  EXPECT_EQ(small.report.components, 1u);
+  EXPECT_EQ(small.report.outer_loops + small.report.hole_loops, 1u);
+  const ScanMesh large = patch_above_a_plane(2.2);  // 4.8 mm²
+  EXPECT_EQ(large.report.components, 2u);
+  EXPECT_EQ(large.report.outer_loops + large.report.hole_loops, 2u);
 }
 
 }  // namespace
